@@ -1,0 +1,66 @@
+//! The library's error type.
+//!
+//! Every variant that comes from user input says where (file, line or field), what is wrong and how to fix it, so
+//! that the binary can print it as it is and exit with code 2.
+
+use std::path::{Path, PathBuf};
+
+/// Result with the talus [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// What can go wrong in talus.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file could not be read or written. Check the path and its permissions.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file is malformed: `location` is `file:line` or `file` plus a field name.
+    #[error("{location}: {message}\n  how to fix: {hint}")]
+    Format {
+        /// Where: `path:line`, `path: field`, or `path`.
+        location: String,
+        /// What is wrong.
+        message: String,
+        /// How to fix it.
+        hint: String,
+    },
+    /// A parameter value is out of range or inconsistent: `field` names it as the user wrote it.
+    #[error("{field}: {message}\n  how to fix: {hint}")]
+    Invalid {
+        /// The parameter, e.g. `materials.face.cr_mean` or `scenario.toml: rocks.mass_kg`.
+        field: String,
+        /// What is wrong.
+        message: String,
+        /// How to fix it.
+        hint: String,
+    },
+}
+
+impl Error {
+    /// An I/O error on `path`.
+    pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
+        Error::Io { path: path.as_ref().to_path_buf(), source }
+    }
+
+    /// A format error at `location` (`file:line` or `file: field`).
+    pub fn format(location: impl Into<String>, message: impl Into<String>, hint: impl Into<String>) -> Self {
+        Error::Format { location: location.into(), message: message.into(), hint: hint.into() }
+    }
+
+    /// A format error at `line` (1-based) of `path`.
+    pub fn at_line(path: impl AsRef<Path>, line: usize, message: impl Into<String>, hint: impl Into<String>) -> Self {
+        Error::format(format!("{}:{line}", path.as_ref().display()), message, hint)
+    }
+
+    /// An invalid parameter named `field`.
+    pub fn invalid(field: impl Into<String>, message: impl Into<String>, hint: impl Into<String>) -> Self {
+        Error::Invalid { field: field.into(), message: message.into(), hint: hint.into() }
+    }
+}

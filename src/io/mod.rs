@@ -1,0 +1,22 @@
+//! File formats: terrain meshes and grids in, rasters and tables out. Formats only, no physics.
+
+pub mod atomic;
+
+pub use atomic::{write_atomic, write_bytes_atomic};
+
+/// A triangle mesh as read from a file, in the file's own frame and axes (no origin shift, no axis swap).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct MeshData {
+    /// Vertex positions.
+    pub vertices: Vec<[f64; 3]>,
+    /// Triangles as indices into `vertices`, in the file's winding.
+    pub triangles: Vec<[u32; 3]>,
+    /// Per triangle: index into `group_names` (OBJ object or group; a single group for STL).
+    pub group: Vec<u32>,
+    /// Group names (OBJ `o`/`g` names; the file stem for STL).
+    pub group_names: Vec<String>,
+    /// Per triangle: index into `material_names` (OBJ `usemtl`; 0 when absent).
+    pub material: Vec<u32>,
+    /// Material names (OBJ `usemtl` names; `""` when absent).
+    pub material_names: Vec<String>,
+}

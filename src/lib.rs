@@ -1,0 +1,16 @@
+//! # talus
+//!
+//! An open-source rockfall hazard mapper. It loads a real terrain surface (OBJ, STL, GeoTIFF or ESRI ASCII DEM),
+//! releases rocks from source zones, and runs them as 3D rigid bodies (3DRB: one coefficient of restitution plus
+//! static and dynamic friction) or as 2D lumped masses on profiles (2DLM, RocFall semantics). Results are binned
+//! into georeferenced hazard rasters while simulating.
+//!
+//! Physics choices cite `physics.md` (shipped with the project's shared docs) or a paper, or are marked as ours.
+#![warn(missing_docs)]
+
+pub mod error;
+pub mod io;
+pub mod raster;
+pub mod terrain;
+
+pub use error::{Error, Result};

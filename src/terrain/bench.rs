@@ -1,0 +1,183 @@
+//! The benched slope of the paper (a stack of faces and catch benches), as a 2D profile and as a 3D mesh.
+//!
+//! # Units
+//! Lengths in m, angles in degrees. x runs downslope, z up; the profile starts at the crest floor.
+
+use crate::error::{Error, Result};
+
+/// Geometry of a benched slope. Defaults are the paper's stack: 5 benches of 20 m at 60° with 7 m catch benches.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BenchGeometry {
+    /// Vertical height of each face, m (default: 20).
+    pub bench_height_m: f64,
+    /// Face angle from horizontal, degrees (default: 60).
+    pub face_angle_deg: f64,
+    /// Horizontal width of each catch bench, m (default: 7).
+    pub bench_width_m: f64,
+    /// Number of face + catch-bench pairs (default: 5). Below the last catch bench one more face of the same height
+    /// drops to the toe floor, so that a rock the last bench does not catch leaves the stack ("bench 0").
+    pub n_benches: usize,
+    /// Width of the flat floor behind the top crest, m (default: 10).
+    pub crest_floor_m: f64,
+    /// Width of the flat run-out floor after the last toe, m (default: 60).
+    pub toe_floor_m: f64,
+    /// Lateral width of the 3D mesh (y extent), m (default: 60).
+    pub lateral_width_m: f64,
+    /// Largest triangle edge along x and y in the 3D mesh, m (default: 2.5).
+    pub max_edge_m: f64,
+}
+
+impl Default for BenchGeometry {
+    fn default() -> Self {
+        BenchGeometry {
+            bench_height_m: 20.0,
+            face_angle_deg: 60.0,
+            bench_width_m: 7.0,
+            n_benches: 5,
+            crest_floor_m: 10.0,
+            toe_floor_m: 60.0,
+            lateral_width_m: 60.0,
+            max_edge_m: 2.5,
+        }
+    }
+}
+
+/// What a profile segment is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BenchPart {
+    /// A bench face.
+    Face,
+    /// A floor: crest floor, catch bench or toe floor.
+    Floor,
+}
+
+/// One vertex of a bench profile; `part` is that of the segment that starts here.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfileVertex {
+    /// Distance along the slope, m.
+    pub x_m: f64,
+    /// Elevation, m.
+    pub z_m: f64,
+    /// The segment starting at this vertex.
+    pub part: BenchPart,
+    /// Which bench this segment belongs to: 0 for the crest floor, k for face k and the bench below it.
+    pub bench: usize,
+}
+
+impl BenchGeometry {
+    /// Checks ranges; `prefix` is prepended to field names in errors.
+    pub fn validate(&self, prefix: &str) -> Result<()> {
+        let field = |name: &str| format!("{prefix}{name}");
+        let positive = |name: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::invalid(field(name), format!("must be a positive number of metres, got {v}"), "set a value above 0"))
+            }
+        };
+        positive("bench_height_m", self.bench_height_m)?;
+        positive("lateral_width_m", self.lateral_width_m)?;
+        positive("max_edge_m", self.max_edge_m)?;
+        if !(self.face_angle_deg > 1.0 && self.face_angle_deg < 89.9) {
+            return Err(Error::invalid(
+                field("face_angle_deg"),
+                format!("must be between 1 and 89.9 degrees, got {}", self.face_angle_deg),
+                "give the face angle from horizontal, e.g. 60",
+            ));
+        }
+        for (name, v) in
+            [("bench_width_m", self.bench_width_m), ("crest_floor_m", self.crest_floor_m), ("toe_floor_m", self.toe_floor_m)]
+        {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::invalid(field(name), format!("must be 0 or more metres, got {v}"), "set a width >= 0"));
+            }
+        }
+        if self.n_benches == 0 {
+            return Err(Error::invalid(field("n_benches"), "must be at least 1", "set n_benches = 1 or more"));
+        }
+        Ok(())
+    }
+
+    /// Horizontal run of one face, m.
+    pub fn face_run_m(&self) -> f64 {
+        self.bench_height_m / self.face_angle_deg.to_radians().tan()
+    }
+
+    /// Number of faces: one per bench plus the face below the last bench.
+    pub fn n_faces(&self) -> usize {
+        self.n_benches + 1
+    }
+
+    /// Total height from the crest floor to the toe floor, m.
+    pub fn total_height_m(&self) -> f64 {
+        self.bench_height_m * self.n_faces() as f64
+    }
+
+    /// The profile vertices from the back of the crest floor to the end of the toe floor. The top crest is at
+    /// x = `crest_floor_m`, z = total height; the toe floor is at z = 0.
+    pub fn profile(&self) -> Vec<ProfileVertex> {
+        let run = self.face_run_m();
+        let mut z = self.total_height_m();
+        let mut x = 0.0;
+        let mut out = Vec::new();
+        if self.crest_floor_m > 0.0 {
+            out.push(ProfileVertex { x_m: x, z_m: z, part: BenchPart::Floor, bench: 0 });
+            x += self.crest_floor_m;
+        }
+        for k in 1..=self.n_faces() {
+            let bench = if k > self.n_benches { 0 } else { k };
+            out.push(ProfileVertex { x_m: x, z_m: z, part: BenchPart::Face, bench });
+            x += run;
+            z -= self.bench_height_m;
+            let width = if bench == 0 { self.toe_floor_m } else { self.bench_width_m };
+            if width > 0.0 {
+                out.push(ProfileVertex { x_m: x, z_m: z, part: BenchPart::Floor, bench });
+                x += width;
+            }
+        }
+        let last = *out.last().expect("at least one face");
+        out.push(ProfileVertex { x_m: x, z_m: z, ..last });
+        out
+    }
+
+    /// x of the crest of face `k` (1-based) and of its toe.
+    pub fn face_span_m(&self, k: usize) -> (f64, f64) {
+        let crest = self.crest_floor_m + (k - 1) as f64 * (self.face_run_m() + self.bench_width_m);
+        (crest, crest + self.face_run_m())
+    }
+
+    /// Which bench a horizontal position x belongs to: k in 1..=n_benches from the crest of face k to the crest of
+    /// face k + 1 (face k and the catch bench below it), 0 past the last bench. Positions behind the first crest
+    /// count as 1.
+    pub fn bench_at(&self, x_m: f64) -> usize {
+        for k in 1..=self.n_benches {
+            let (_, toe) = self.face_span_m(k);
+            if x_m <= toe + self.bench_width_m {
+                return k;
+            }
+        }
+        0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_stack_profile() {
+        let g = BenchGeometry::default();
+        let p = g.profile();
+        assert!((p.last().unwrap().z_m).abs() < 1e-12);
+        let run = 20.0 / 60f64.to_radians().tan();
+        assert_eq!(p.first().unwrap().z_m, 120.0);
+        let expected_len = 10.0 + 6.0 * run + 5.0 * 7.0 + 60.0;
+        assert!((p.last().unwrap().x_m - expected_len).abs() < 1e-9);
+        assert_eq!(p.iter().filter(|v| v.part == BenchPart::Face).count(), 6);
+        assert_eq!(g.bench_at(g.face_span_m(1).1 + 1.0), 1);
+        assert_eq!(g.bench_at(g.face_span_m(2).1 + 1.0), 2);
+        assert_eq!(g.bench_at(g.face_span_m(5).1 + 6.9), 5);
+        assert_eq!(g.bench_at(g.face_span_m(5).1 + 7.1), 0);
+    }
+}
