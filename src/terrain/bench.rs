@@ -73,7 +73,11 @@ impl BenchGeometry {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(Error::invalid(field(name), format!("must be a positive number of metres, got {v}"), "set a value above 0"))
+                Err(Error::invalid(
+                    field(name),
+                    format!("must be a positive number of metres, got {v}"),
+                    "set a value above 0",
+                ))
             }
         };
         positive("bench_height_m", self.bench_height_m)?;
@@ -86,11 +90,17 @@ impl BenchGeometry {
                 "give the face angle from horizontal, e.g. 60",
             ));
         }
-        for (name, v) in
-            [("bench_width_m", self.bench_width_m), ("crest_floor_m", self.crest_floor_m), ("toe_floor_m", self.toe_floor_m)]
-        {
+        for (name, v) in [
+            ("bench_width_m", self.bench_width_m),
+            ("crest_floor_m", self.crest_floor_m),
+            ("toe_floor_m", self.toe_floor_m),
+        ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::invalid(field(name), format!("must be 0 or more metres, got {v}"), "set a width >= 0"));
+                return Err(Error::invalid(
+                    field(name),
+                    format!("must be 0 or more metres, got {v}"),
+                    "set a width >= 0",
+                ));
             }
         }
         if self.n_benches == 0 {
