@@ -9,9 +9,15 @@
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod hazard;
 pub mod io;
+pub mod parallel;
 pub mod random;
 pub mod raster;
+pub mod rock;
+pub mod scenario;
+pub mod sim;
+pub mod source;
 pub mod terrain;
 
 pub use error::{Error, Result};

@@ -171,6 +171,69 @@ impl BenchGeometry {
     }
 }
 
+impl BenchGeometry {
+    /// The 3D mesh: the profile extruded over `lateral_width_m` in y (from 0), segments cut into pieces no longer
+    /// than `max_edge_m`, triangles counter-clockwise seen from above, in groups `face` and `floor`.
+    pub fn mesh(&self) -> crate::io::MeshData {
+        let profile = self.profile();
+        // Stations along x with their part (of the segment starting there).
+        let mut stations: Vec<(f64, f64, BenchPart)> = Vec::new();
+        for w in profile.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            let len = ((b.x_m - a.x_m).powi(2) + (b.z_m - a.z_m).powi(2)).sqrt();
+            let pieces = ((len / self.max_edge_m).ceil() as usize).max(1);
+            for k in 0..pieces {
+                let f = k as f64 / pieces as f64;
+                stations.push((a.x_m + f * (b.x_m - a.x_m), a.z_m + f * (b.z_m - a.z_m), a.part));
+            }
+        }
+        let last = profile[profile.len() - 1];
+        stations.push((last.x_m, last.z_m, last.part));
+        let ny = ((self.lateral_width_m / self.max_edge_m).ceil() as usize).max(1);
+        let mut vertices = Vec::with_capacity(stations.len() * (ny + 1));
+        for j in 0..=ny {
+            let y = self.lateral_width_m * j as f64 / ny as f64;
+            for &(x, z, _) in &stations {
+                vertices.push([x, y, z]);
+            }
+        }
+        let nx = stations.len();
+        let id = |i: usize, j: usize| (j * nx + i) as u32;
+        let (mut triangles, mut group) = (Vec::new(), Vec::new());
+        for j in 0..ny {
+            for i in 0..nx - 1 {
+                let g = if stations[i].2 == BenchPart::Face { 0 } else { 1 };
+                triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+                group.extend([g, g]);
+            }
+        }
+        let n = triangles.len();
+        crate::io::MeshData {
+            vertices,
+            triangles,
+            group,
+            group_names: vec!["face".into(), "floor".into()],
+            material: vec![0; n],
+            material_names: vec![String::new()],
+        }
+    }
+}
+
+/// Writes the bench profile as a CSV profile (`x_m,z_m,material`, materials `face` and `floor`).
+pub fn write_profile_csv(g: &BenchGeometry, path: &std::path::Path) -> Result<()> {
+    use std::io::Write;
+    crate::io::write_atomic(path, |w| {
+        let err = |e| Error::io(path, e);
+        writeln!(w, "x_m,z_m,material").map_err(err)?;
+        for v in g.profile() {
+            let m = if v.part == BenchPart::Face { "face" } else { "floor" };
+            writeln!(w, "{},{},{m}", v.x_m, v.z_m).map_err(err)?;
+        }
+        Ok(())
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -189,5 +252,21 @@ mod tests {
         assert_eq!(g.bench_at(g.face_span_m(2).1 + 1.0), 2);
         assert_eq!(g.bench_at(g.face_span_m(5).1 + 6.9), 5);
         assert_eq!(g.bench_at(g.face_span_m(5).1 + 7.1), 0);
+    }
+
+    #[test]
+    fn mesh_is_the_extruded_profile() {
+        let g = BenchGeometry::default();
+        let m = g.mesh();
+        assert_eq!(m.triangles.len(), m.group.len());
+        let xmax = m.vertices.iter().map(|v| v[0]).fold(0.0, f64::max);
+        assert!((xmax - g.profile().last().unwrap().x_m).abs() < 1e-9);
+        // Every triangle is counter-clockwise from above (or vertical) and no longer than max_edge in x and y.
+        for t in &m.triangles {
+            let [a, b, c] = t.map(|k| m.vertices[k as usize]);
+            let det = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
+            assert!(det > 0.0);
+        }
+        assert!(m.group.contains(&0) && m.group.contains(&1));
     }
 }

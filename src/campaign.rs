@@ -1,0 +1,225 @@
+//! Field campaigns: release points, observed rest points and blocks, in the CSV format of `data.md`.
+//!
+//! Column names are fixed, extra columns are ignored, units are SI and in the names. Every error names the file,
+//! the line and the column.
+
+use crate::error::{Error, Result};
+use crate::rock::{RockBody, RockSize, ShapeKind};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// One released rock.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Release {
+    /// Run id.
+    pub trajectory_id: String,
+    /// Release position of the centre of mass, m.
+    pub position_m: [f64; 3],
+    /// Initial velocity, m/s.
+    pub velocity_mps: [f64; 3],
+    /// Initial spin, rad/s (zero if absent).
+    pub spin_radps: [f64; 3],
+    /// Block id.
+    pub block_id: String,
+}
+
+/// One observed rest point.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Deposition {
+    /// Run id.
+    pub trajectory_id: String,
+    /// Rest position, m.
+    pub position_m: [f64; 3],
+    /// Horizontal distance from release to rest, m (computed if absent from the file).
+    pub runout_m: f64,
+}
+
+/// A block.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Block {
+    /// Id.
+    pub block_id: String,
+    /// Name, if given.
+    pub name: String,
+    /// Mass, kg.
+    pub mass_kg: f64,
+    /// Bounding dimensions, m.
+    pub size_m: [f64; 3],
+    /// Shape: `cube`, `flat_box`, `smartie`, a hull file, or empty (inferred from the sizes).
+    pub shape: String,
+}
+
+/// A field campaign.
+#[derive(Debug, Clone)]
+pub struct Campaign {
+    /// Folder.
+    pub dir: PathBuf,
+    /// Releases, in file order.
+    pub releases: Vec<Release>,
+    /// Observed rest points by run id.
+    pub depositions: BTreeMap<String, Deposition>,
+    /// Blocks by id.
+    pub blocks: BTreeMap<String, Block>,
+}
+
+/// A parsed CSV: header and rows, with the file for error messages.
+struct Table {
+    path: PathBuf,
+    header: Vec<String>,
+    rows: Vec<(usize, Vec<String>)>,
+}
+
+impl Table {
+    fn read(path: &Path) -> Result<Table> {
+        let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).flexible(true).from_path(path).map_err(|e| csv_error(path, e))?;
+        let header: Vec<String> = rdr.headers().map_err(|e| csv_error(path, e))?.iter().map(|s| s.to_string()).collect();
+        let mut rows = Vec::new();
+        for rec in rdr.records() {
+            let rec = rec.map_err(|e| csv_error(path, e))?;
+            let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+            if rec.iter().all(|f| f.is_empty()) {
+                continue;
+            }
+            rows.push((line, rec.iter().map(|s| s.to_string()).collect()));
+        }
+        Ok(Table { path: path.to_path_buf(), header, rows })
+    }
+
+    fn col(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+
+    fn need(&self, name: &str) -> Result<usize> {
+        self.col(name).ok_or_else(|| {
+            Error::at_line(&self.path, 1, format!("the header has no column `{name}`"), format!("add a `{name}` column (see the campaign format in README.md)"))
+        })
+    }
+
+    fn text(&self, row: &(usize, Vec<String>), col: usize, name: &str) -> Result<String> {
+        match row.1.get(col) {
+            Some(s) if !s.is_empty() => Ok(s.clone()),
+            _ => Err(Error::at_line(&self.path, row.0, format!("column `{name}` is empty"), "fill it in")),
+        }
+    }
+
+    fn number(&self, row: &(usize, Vec<String>), col: usize, name: &str) -> Result<f64> {
+        let s = self.text(row, col, name)?;
+        match s.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(Error::at_line(&self.path, row.0, format!("column `{name}` holds '{s}', not a finite number"), "write a plain number in SI units")),
+        }
+    }
+
+    fn optional_number(&self, row: &(usize, Vec<String>), name: &str) -> Result<Option<f64>> {
+        match self.col(name) {
+            Some(c) if row.1.get(c).is_some_and(|s| !s.is_empty()) => Ok(Some(self.number(row, c, name)?)),
+            _ => Ok(None),
+        }
+    }
+}
+
+fn csv_error(path: &Path, e: csv::Error) -> Error {
+    let line = e.position().map(|p| p.line() as usize);
+    match (e.kind(), line) {
+        (csv::ErrorKind::Io(_), _) => Error::format(path.display().to_string(), e.to_string(), "check that the file exists and is readable"),
+        (_, Some(l)) => Error::at_line(path, l, e.to_string(), "fix the CSV syntax"),
+        _ => Error::format(path.display().to_string(), e.to_string(), "fix the CSV syntax"),
+    }
+}
+
+impl Campaign {
+    /// Reads `release_points.csv`, `observed_deposition.csv` (optional: a campaign to predict has none) and
+    /// `block_metadata.csv` from `dir`.
+    pub fn read(dir: &Path) -> Result<Campaign> {
+        let rel = Table::read(&dir.join("release_points.csv"))?;
+        let (id, x, y, z, b) = (rel.need("trajectory_id")?, rel.need("x_m")?, rel.need("y_m")?, rel.need("z_m")?, rel.need("block_id")?);
+        let mut releases = Vec::new();
+        let mut seen = std::collections::BTreeSet::new();
+        for row in &rel.rows {
+            let trajectory_id = rel.text(row, id, "trajectory_id")?;
+            if !seen.insert(trajectory_id.clone()) {
+                return Err(Error::at_line(&rel.path, row.0, format!("trajectory_id '{trajectory_id}' appears twice"), "give every run its own id"));
+            }
+            let v = |n: &str| rel.optional_number(row, n).map(|v| v.unwrap_or(0.0));
+            releases.push(Release {
+                trajectory_id,
+                position_m: [rel.number(row, x, "x_m")?, rel.number(row, y, "y_m")?, rel.number(row, z, "z_m")?],
+                velocity_mps: [v("vx_mps")?, v("vy_mps")?, v("vz_mps")?],
+                spin_radps: [v("wx_radps")?, v("wy_radps")?, v("wz_radps")?],
+                block_id: rel.text(row, b, "block_id")?,
+            });
+        }
+        if releases.is_empty() {
+            return Err(Error::format(rel.path.display().to_string(), "holds no release", "add one row per released rock"));
+        }
+        let blk = Table::read(&dir.join("block_metadata.csv"))?;
+        let (bid, m) = (blk.need("block_id")?, blk.need("mass_kg")?);
+        let (sx, sy, sz) = (blk.need("size_x_m")?, blk.need("size_y_m")?, blk.need("size_z_m")?);
+        let mut blocks = BTreeMap::new();
+        for row in &blk.rows {
+            let block = Block {
+                block_id: blk.text(row, bid, "block_id")?,
+                name: blk.col("name").and_then(|c| row.1.get(c).cloned()).unwrap_or_default(),
+                mass_kg: blk.number(row, m, "mass_kg")?,
+                size_m: [blk.number(row, sx, "size_x_m")?, blk.number(row, sy, "size_y_m")?, blk.number(row, sz, "size_z_m")?],
+                shape: blk.col("shape").and_then(|c| row.1.get(c).cloned()).unwrap_or_default(),
+            };
+            if block.mass_kg <= 0.0 || block.size_m.iter().any(|&s| s <= 0.0) {
+                return Err(Error::at_line(&blk.path, row.0, "mass and sizes must be positive", "fix the block's mass_kg and size_*_m"));
+            }
+            blocks.insert(block.block_id.clone(), block);
+        }
+        for r in &releases {
+            if !blocks.contains_key(&r.block_id) {
+                return Err(Error::format(
+                    rel.path.display().to_string(),
+                    format!("run '{}' uses block '{}', which block_metadata.csv does not list", r.trajectory_id, r.block_id),
+                    "add the block to block_metadata.csv or fix the block_id",
+                ));
+            }
+        }
+        let mut depositions = BTreeMap::new();
+        let dep_path = dir.join("observed_deposition.csv");
+        if dep_path.is_file() {
+            let dep = Table::read(&dep_path)?;
+            let (id, x, y, z) = (dep.need("trajectory_id")?, dep.need("x_m")?, dep.need("y_m")?, dep.need("z_m")?);
+            for row in &dep.rows {
+                let tid = dep.text(row, id, "trajectory_id")?;
+                let Some(rel) = releases.iter().find(|r| r.trajectory_id == tid) else {
+                    return Err(Error::at_line(&dep.path, row.0, format!("run '{tid}' has no release in release_points.csv"), "fix the trajectory_id"));
+                };
+                let p = [dep.number(row, x, "x_m")?, dep.number(row, y, "y_m")?, dep.number(row, z, "z_m")?];
+                let computed = ((p[0] - rel.position_m[0]).powi(2) + (p[1] - rel.position_m[1]).powi(2)).sqrt();
+                let runout_m = dep.optional_number(row, "observed_runout_m")?.unwrap_or(computed);
+                depositions.insert(tid.clone(), Deposition { trajectory_id: tid, position_m: p, runout_m });
+            }
+        }
+        Ok(Campaign { dir: dir.to_path_buf(), releases, depositions, blocks })
+    }
+
+    /// The rock body of a block. The shape is the block's own if given; otherwise inferred from its sizes (our
+    /// rule): sorted sizes a ≥ b ≥ c give a `flat_box` when c/a < 0.5 and a `cube`-family box otherwise, in both
+    /// cases a box with the block's dimensions and exact mass.
+    pub fn body(&self, block: &Block) -> Result<RockBody> {
+        let field = format!("{}: block {}", self.dir.join("block_metadata.csv").display(), block.block_id);
+        let kind = match block.shape.as_str() {
+            "" => {
+                let mut s = block.size_m;
+                s.sort_by(|a, b| b.total_cmp(a));
+                if s[2] / s[0] < 0.5 {
+                    ShapeKind::FlatBox
+                } else {
+                    ShapeKind::Cube
+                }
+            }
+            name => match ShapeKind::builtin(name) {
+                Some(k) => k,
+                None => {
+                    let p = self.dir.join(name);
+                    ShapeKind::Hull { name: name.to_string(), points: crate::io::points::read_hull_points(&p)? }
+                }
+            },
+        };
+        RockBody::new(&kind, RockSize::DimensionsAndMass { size_m: block.size_m, mass_kg: block.mass_kg }, &field)
+    }
+}

@@ -1,0 +1,70 @@
+//! Deterministic parallel map: items are computed in parallel (rayon, when the `parallel` feature is on) in
+//! chunks, and handed to the consumer strictly in index order. Results therefore never depend on the number of
+//! threads, and memory holds one chunk of results at a time, not all of them.
+
+/// Computes `f(i)` for `i` in `0..n` on `threads` threads (0 = all cores) and passes each result to `consume` in
+/// increasing `i`. Chunks of `chunk` items are computed at a time.
+pub fn map_in_order<T, F, C>(n: usize, threads: usize, chunk: usize, f: F, mut consume: C)
+where
+    T: Send,
+    F: Fn(usize) -> T + Sync + Send,
+    C: FnMut(usize, T),
+{
+    let chunk = chunk.max(1);
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        if threads == 1 {
+            for i in 0..n {
+                consume(i, f(i));
+            }
+            return;
+        }
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok();
+        let mut start = 0;
+        while start < n {
+            let end = (start + chunk).min(n);
+            let compute = || (start..end).into_par_iter().map(&f).collect::<Vec<T>>();
+            let results = match &pool {
+                Some(p) => p.install(compute),
+                None => compute(),
+            };
+            for (k, r) in results.into_iter().enumerate() {
+                consume(start + k, r);
+            }
+            start = end;
+        }
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        let _ = (threads, chunk);
+        for i in 0..n {
+            consume(i, f(i));
+        }
+    }
+}
+
+/// `f(i)` for `i` in `0..n`, collected in order (see [`map_in_order`]).
+pub fn collect_in_order<T, F>(n: usize, threads: usize, f: F) -> Vec<T>
+where
+    T: Send,
+    F: Fn(usize) -> T + Sync + Send,
+{
+    let mut out = Vec::with_capacity(n);
+    map_in_order(n, threads, 1024, f, |_, r| out.push(r));
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn order_is_kept_for_any_thread_count() {
+        for threads in [1, 2, 3] {
+            let mut seen = Vec::new();
+            map_in_order(100, threads, 7, |i| i * i, |i, r| seen.push((i, r)));
+            assert_eq!(seen, (0..100).map(|i| (i, i * i)).collect::<Vec<_>>());
+        }
+    }
+}

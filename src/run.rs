@@ -1,0 +1,439 @@
+//! `talus run`: a whole scenario, from files to end points, hazard rasters and a run manifest.
+
+use crate::ensemble::{RockRecord, Setup};
+use crate::error::{Error, Result};
+use crate::hazard::{endpoint_density, CellTrack, HazardAccumulator, RasterFrame};
+use crate::raster::Grid;
+use crate::scenario::Scenario;
+use crate::sim::{Observer, Sample, StopReason};
+use crate::source::Sources;
+use crate::terrain::build::build_terrain;
+use crate::terrain::Terrain;
+use sha2::{Digest, Sha256};
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Command-line overrides of the scenario.
+#[derive(Debug, Clone, Default)]
+pub struct RunOverrides {
+    /// Total rocks.
+    pub rocks: Option<usize>,
+    /// Seed.
+    pub seed: Option<u64>,
+    /// Threads (0 or `None`: all cores).
+    pub threads: Option<usize>,
+    /// Paths of the first N rocks.
+    pub paths: Option<usize>,
+}
+
+/// The run manifest written as `summary.json`.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct RunSummary {
+    /// talus version.
+    pub talus_version: String,
+    /// Scenario file.
+    pub scenario: String,
+    /// Scenario title.
+    pub title: String,
+    /// SHA-256 of every input file.
+    pub input_sha256: BTreeMap<String, String>,
+    /// Seed used.
+    pub seed: u64,
+    /// Rocks run.
+    pub rocks: usize,
+    /// Threads used (0 = all cores).
+    pub threads: usize,
+    /// Rocks per source.
+    pub rocks_per_source: BTreeMap<String, usize>,
+    /// The scenario as used (overrides applied, defaults filled in).
+    pub parameters: serde_json::Value,
+    /// Materials as used.
+    pub materials: Vec<crate::terrain::Material>,
+    /// Terrain facts.
+    pub terrain: TerrainFacts,
+    /// Raster geometry.
+    pub raster: RasterFacts,
+    /// Rocks by stop reason.
+    pub stop_reasons: BTreeMap<String, usize>,
+    /// Run-out statistics over all rocks, m.
+    pub runout_m: Stats,
+    /// Travel time statistics, s.
+    pub travel_time_s: Stats,
+    /// Largest kinetic energy per rock statistics, kJ.
+    pub max_kinetic_kj: Stats,
+    /// Largest bounce height per rock statistics, m.
+    pub max_bounce_m: Stats,
+    /// Impacts in which the energy guard re-solved with Cr = 0.
+    pub energy_guards: u64,
+    /// Contact steps over all rocks.
+    pub contact_steps: u64,
+    /// Wall-clock time, s.
+    pub wall_time_s: f64,
+    /// Rocks per second of wall-clock time.
+    pub rocks_per_second: f64,
+    /// Files written.
+    pub outputs: Vec<String>,
+}
+
+/// Terrain facts for the manifest.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct TerrainFacts {
+    /// Triangles used.
+    pub triangles: usize,
+    /// Degenerate triangles dropped.
+    pub degenerate_dropped: usize,
+    /// Vertical triangles (contact only).
+    pub vertical: usize,
+    /// Local origin subtracted at load (z-up axes), m.
+    pub origin_m: [f64; 3],
+    /// Up axis of the files.
+    pub up: crate::terrain::UpAxis,
+    /// EPSG code, if known.
+    pub crs_epsg: Option<u32>,
+}
+
+/// Raster facts for the manifest.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct RasterFacts {
+    /// Cell size, m.
+    pub cell_size_m: f64,
+    /// Columns.
+    pub ncols: usize,
+    /// Rows.
+    pub nrows: usize,
+    /// West edge, m.
+    pub x_min_m: f64,
+    /// North edge, m.
+    pub y_max_m: f64,
+    /// End-point kernel bandwidth, m.
+    pub endpoint_bandwidth_m: f64,
+}
+
+/// Percentiles of a quantity over rocks.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct Stats {
+    /// Smallest.
+    pub min: f64,
+    /// Median.
+    pub p50: f64,
+    /// 90th percentile.
+    pub p90: f64,
+    /// 95th percentile.
+    pub p95: f64,
+    /// Largest.
+    pub max: f64,
+    /// Mean.
+    pub mean: f64,
+}
+
+impl Stats {
+    /// Statistics of `values` (NaN-free); all zero when empty.
+    pub fn of(values: &mut [f64]) -> Stats {
+        if values.is_empty() {
+            return Stats::default();
+        }
+        values.sort_by(f64::total_cmp);
+        Stats {
+            min: values[0],
+            p50: quantile_sorted(values, 0.5),
+            p90: quantile_sorted(values, 0.9),
+            p95: quantile_sorted(values, 0.95),
+            max: values[values.len() - 1],
+            mean: values.iter().sum::<f64>() / values.len() as f64,
+        }
+    }
+}
+
+/// Linear-interpolation quantile of sorted values (the "type 7" definition of R and NumPy).
+pub fn quantile_sorted(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return f64::NAN;
+    }
+    let h = q.clamp(0.0, 1.0) * (sorted.len() - 1) as f64;
+    let (lo, hi) = (h.floor() as usize, h.ceil() as usize);
+    sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
+}
+
+/// Loads the terrain of a scenario.
+pub fn load_terrain(sc: &Scenario) -> Result<Terrain> {
+    build_terrain(&sc.terrain_files, &sc.file.terrain, &sc.materials, &sc.path)
+}
+
+/// Builds the run setup (terrain, sources, shapes) of a scenario with overrides applied.
+pub fn setup(sc: &Scenario, overrides: &RunOverrides) -> Result<Setup> {
+    let terrain = load_terrain(sc)?;
+    let total = overrides.rocks.or(sc.file.simulation.rocks);
+    let sources = Sources::build(&sc.file.sources, &terrain, total, &format!("{}: sources", sc.path.display()))?;
+    Setup::new(sc, terrain, sources, overrides.seed.unwrap_or(sc.file.simulation.seed))
+}
+
+/// Records a rock's samples (for `--paths`).
+#[derive(Debug, Default)]
+struct PathRecorder(Vec<Sample>);
+
+impl Observer for PathRecorder {
+    fn sample(&mut self, s: &Sample) {
+        self.0.push(*s);
+    }
+}
+
+/// Raster products, in output order: (file stem, description).
+pub const RASTERS: [(&str, &str); 6] = [
+    ("endpoint_density", "probability per cell that a rock stops there"),
+    ("reach_probability", "fraction of rocks that pass over the cell"),
+    ("kinetic_energy_p95_kj", "95th percentile over rocks of their largest kinetic energy in the cell, kJ"),
+    ("kinetic_energy_max_kj", "largest kinetic energy in the cell, kJ"),
+    ("bounce_height_p95_m", "95th percentile over rocks of their largest passing height in the cell, m"),
+    ("bounce_height_max_m", "largest passing height in the cell, m"),
+];
+
+/// Runs a scenario and writes its outputs into `out_dir`. `progress` is called with the number of rocks done.
+pub fn run_scenario(sc: &Scenario, overrides: &RunOverrides, out_dir: &Path, progress: &dyn Fn(usize, usize)) -> Result<RunSummary> {
+    let t0 = Instant::now();
+    let setup = setup(sc, overrides)?;
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    let n = setup.rock_count();
+    let threads = overrides.threads.or(sc.file.simulation.threads).unwrap_or(0);
+    let n_paths = overrides.paths.unwrap_or(sc.file.output.paths).min(n);
+    let cell = sc.file.output.cell_size_m;
+    let bandwidth = sc.file.output.endpoint_bandwidth_m.unwrap_or(2.0 * cell);
+    let frame = RasterFrame::covering(&setup.terrain, cell);
+    let mut acc = HazardAccumulator::new(frame);
+    let terrain = &setup.terrain;
+
+    let endpoints_path = out_dir.join("endpoints.csv");
+    let endpoints_tmp = crate::io::atomic::temp_path(&endpoints_path);
+    let mut csv = BufWriter::new(File::create(&endpoints_tmp).map_err(|e| Error::io(&endpoints_tmp, e))?);
+    let io_err = |e: std::io::Error| Error::io(&endpoints_tmp, e);
+    writeln!(
+        csv,
+        "rock_id,source_id,shape,mass_kg,release_x_m,release_y_m,release_z_m,end_x_m,end_y_m,end_z_m,stop_reason,runout_m,travel_time_s,max_kinetic_j,max_bounce_m"
+    )
+    .map_err(io_err)?;
+    let mut stopped_xy = Vec::new();
+    let mut paths: Vec<(usize, Vec<Sample>)> = Vec::new();
+    let mut reasons: BTreeMap<String, usize> = StopReason::ALL.iter().map(|r| (r.as_str().to_string(), 0)).collect();
+    let (mut runouts, mut times, mut energies, mut bounces) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+    let (mut guards, mut contact_steps) = (0u64, 0u64);
+    let mut write_error = None;
+    crate::parallel::map_in_order(
+        n,
+        threads,
+        256,
+        |i| {
+            let mut track = (CellTrack::new(&frame), (i < n_paths).then(PathRecorder::default));
+            let rec = setup.run_rock(i, &mut track);
+            (rec, track.0.into_visits(), track.1.map(|p| p.0))
+        },
+        |i, (rec, visits, path): (RockRecord, _, Option<Vec<Sample>>)| {
+            acc.add(&visits);
+            let o = &rec.outcome;
+            let end = o.final_state.position_m;
+            if o.stop_reason == StopReason::Stopped {
+                stopped_xy.push([end.x, end.y]);
+            }
+            *reasons.entry(o.stop_reason.as_str().to_string()).or_insert(0) += 1;
+            runouts.push(rec.runout_m);
+            times.push(o.travel_time_s);
+            energies.push(o.max_kinetic_j / 1000.0);
+            bounces.push(o.max_bounce_m);
+            guards += o.energy_guards as u64;
+            contact_steps += o.contact_steps;
+            let r = terrain.to_file_frame(&rec.release_m);
+            let e = terrain.to_file_frame(&end);
+            let line = format!(
+                "{},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{},{:.3},{:.3},{:.1},{:.3}\n",
+                rec.index,
+                setup.sources.sources[rec.source].name,
+                rec.shape,
+                rec.mass_kg,
+                r[0],
+                r[1],
+                r[2],
+                e[0],
+                e[1],
+                e[2],
+                o.stop_reason.as_str(),
+                rec.runout_m,
+                o.travel_time_s,
+                o.max_kinetic_j,
+                o.max_bounce_m
+            );
+            if write_error.is_none() {
+                if let Err(e) = csv.write_all(line.as_bytes()) {
+                    write_error = Some(e);
+                }
+            }
+            if let Some(p) = path {
+                paths.push((i, p));
+            }
+            progress(i + 1, n);
+        },
+    );
+    if let Some(e) = write_error {
+        let _ = std::fs::remove_file(&endpoints_tmp);
+        return Err(io_err(e));
+    }
+    csv.flush().map_err(io_err)?;
+    drop(csv);
+
+    let mut outputs = vec!["endpoints.csv".to_string()];
+    let grids = hazard_grids(&acc, terrain, &stopped_xy, n, bandwidth, &sc.file.terrain.crs_epsg.map(crate::raster::Crs::epsg).unwrap_or_else(|| terrain.crs.clone()));
+    for ((stem, _), grid) in RASTERS.iter().zip(&grids) {
+        let name = format!("{stem}.tif");
+        crate::io::geotiff::write_grid(&out_dir.join(&name), grid)?;
+        outputs.push(name);
+    }
+    if !paths.is_empty() {
+        write_paths(out_dir, terrain, &paths)?;
+        outputs.push("paths.csv".into());
+        outputs.push("paths.vtk".into());
+    }
+    std::fs::rename(&endpoints_tmp, &endpoints_path).map_err(|e| Error::io(&endpoints_path, e))?;
+
+    let wall = t0.elapsed().as_secs_f64();
+    let mut file = sc.file.clone();
+    file.simulation.seed = setup.seed;
+    file.simulation.rocks = Some(n);
+    file.simulation.threads = Some(threads);
+    file.output.paths = n_paths;
+    file.output.endpoint_bandwidth_m = Some(bandwidth);
+    let summary = RunSummary {
+        talus_version: env!("CARGO_PKG_VERSION").to_string(),
+        scenario: sc.path.display().to_string(),
+        title: sc.file.title.clone(),
+        input_sha256: input_hashes(sc)?,
+        seed: setup.seed,
+        rocks: n,
+        threads,
+        rocks_per_source: setup.sources.sources.iter().map(|s| (s.name.clone(), s.count)).collect(),
+        parameters: serde_json::to_value(&file).unwrap_or(serde_json::Value::Null),
+        materials: terrain.materials.clone(),
+        terrain: TerrainFacts {
+            triangles: terrain.stats.triangles,
+            degenerate_dropped: terrain.stats.degenerate_dropped,
+            vertical: terrain.stats.vertical,
+            origin_m: [terrain.origin.x, terrain.origin.y, terrain.origin.z],
+            up: terrain.up,
+            crs_epsg: grids[0].crs.epsg,
+        },
+        raster: RasterFacts { cell_size_m: cell, ncols: frame.ncols, nrows: frame.nrows, x_min_m: frame.x_min_m, y_max_m: frame.y_max_m, endpoint_bandwidth_m: bandwidth },
+        stop_reasons: reasons,
+        runout_m: Stats::of(&mut runouts),
+        travel_time_s: Stats::of(&mut times),
+        max_kinetic_kj: Stats::of(&mut energies),
+        max_bounce_m: Stats::of(&mut bounces),
+        energy_guards: guards,
+        contact_steps,
+        wall_time_s: wall,
+        rocks_per_second: n as f64 / wall.max(1e-9),
+        outputs: {
+            outputs.push("summary.json".into());
+            outputs
+        },
+    };
+    let json = serde_json::to_string_pretty(&summary).map_err(|e| Error::invalid("summary.json", e.to_string(), "report this as a bug"))?;
+    crate::io::write_bytes_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
+    Ok(summary)
+}
+
+/// The six hazard rasters (in [`RASTERS`] order). Cells off the terrain are nodata; on the terrain, probabilities
+/// are 0 where nothing came, energies and heights nodata where no rock passed.
+pub fn hazard_grids(acc: &HazardAccumulator, terrain: &Terrain, stopped_xy: &[[f64; 2]], n_rocks: usize, bandwidth_m: f64, crs: &crate::raster::Crs) -> Vec<Grid> {
+    let frame = &acc.frame;
+    let density = endpoint_density(frame, stopped_xy, n_rocks, bandwidth_m);
+    let mut grids: Vec<Grid> = (0..RASTERS.len()).map(|_| frame.empty_grid()).collect();
+    for k in 0..frame.len() {
+        let (x, y) = frame.local_centre(k);
+        if terrain.surface.at(x, y).is_none() {
+            continue;
+        }
+        let values = [
+            density[k],
+            acc.reach_count(k) as f64 / n_rocks.max(1) as f64,
+            acc.kinetic_quantile_j(k, 0.95) / 1000.0,
+            acc.kinetic_max_j(k) / 1000.0,
+            acc.height_quantile_m(k, 0.95),
+            acc.height_max_m(k),
+        ];
+        for (g, v) in grids.iter_mut().zip(values) {
+            g.values[k] = v as f32;
+        }
+    }
+    for g in grids.iter_mut() {
+        g.crs = crs.clone();
+    }
+    grids
+}
+
+fn input_hashes(sc: &Scenario) -> Result<BTreeMap<String, String>> {
+    let mut files: Vec<PathBuf> = vec![sc.path.clone()];
+    files.extend(sc.terrain_files.iter().cloned());
+    for s in &sc.shapes {
+        if let crate::scenario::ShapeRef::Hull(p) = s {
+            files.push(p.clone());
+        }
+    }
+    let mut out = BTreeMap::new();
+    for f in files {
+        let bytes = std::fs::read(&f).map_err(|e| Error::io(&f, e))?;
+        let digest = Sha256::digest(&bytes);
+        out.insert(f.display().to_string(), digest.iter().map(|b| format!("{b:02x}")).collect());
+    }
+    Ok(out)
+}
+
+/// Writes `paths.csv` and `paths.vtk` (legacy VTK polylines, for ParaView), in the terrain's frame.
+fn write_paths(out_dir: &Path, terrain: &Terrain, paths: &[(usize, Vec<Sample>)]) -> Result<()> {
+    let csv_path = out_dir.join("paths.csv");
+    crate::io::write_atomic(&csv_path, |w| {
+        let err = |e| Error::io(&csv_path, e);
+        writeln!(w, "rock_id,t_s,x_m,y_m,z_m,speed_mps,kinetic_j,bounce_m").map_err(err)?;
+        for (id, samples) in paths {
+            for s in samples {
+                let p = terrain.to_file_frame(&s.position_m);
+                writeln!(w, "{id},{:.4},{:.3},{:.3},{:.3},{:.3},{:.1},{:.3}", s.t_s, p[0], p[1], p[2], s.velocity_mps.norm(), s.kinetic_j, s.clearance_m).map_err(err)?;
+            }
+        }
+        Ok(())
+    })?;
+    let vtk_path = out_dir.join("paths.vtk");
+    crate::io::write_atomic(&vtk_path, |w| {
+        let err = |e| Error::io(&vtk_path, e);
+        let total: usize = paths.iter().map(|(_, s)| s.len()).sum();
+        writeln!(w, "# vtk DataFile Version 3.0\ntalus rock paths\nASCII\nDATASET POLYDATA\nPOINTS {total} double").map_err(err)?;
+        for (_, samples) in paths {
+            for s in samples {
+                let p = terrain.to_file_frame(&s.position_m);
+                writeln!(w, "{:.3} {:.3} {:.3}", p[0], p[1], p[2]).map_err(err)?;
+            }
+        }
+        let size: usize = paths.iter().map(|(_, s)| s.len() + 1).sum();
+        writeln!(w, "LINES {} {size}", paths.len()).map_err(err)?;
+        let mut k = 0;
+        for (_, samples) in paths {
+            write!(w, "{}", samples.len()).map_err(err)?;
+            for _ in samples {
+                write!(w, " {k}").map_err(err)?;
+                k += 1;
+            }
+            writeln!(w).map_err(err)?;
+        }
+        writeln!(w, "POINT_DATA {total}\nSCALARS kinetic_j double 1\nLOOKUP_TABLE default").map_err(err)?;
+        for (_, samples) in paths {
+            for s in samples {
+                writeln!(w, "{:.1}", s.kinetic_j).map_err(err)?;
+            }
+        }
+        writeln!(w, "SCALARS rock_id int 1\nLOOKUP_TABLE default").map_err(err)?;
+        for (id, samples) in paths {
+            for _ in samples {
+                writeln!(w, "{id}").map_err(err)?;
+            }
+        }
+        Ok(())
+    })
+}

@@ -1,0 +1,591 @@
+//! The 3DRB scenario file (TOML): what terrain, which materials, where rocks start, what rocks, and how to run.
+//!
+//! Reading happens in two stages, as in ripgrep: [`ScenarioFile`] is the file as written (serde, unknown keys are
+//! errors that name the key), and [`ScenarioFile::resolve`] checks every value and turns relative paths into paths
+//! next to the scenario file. Nothing is simulated until the whole scenario has been checked.
+//!
+//! ```toml
+//! [terrain]
+//! files = ["../meshes/bench_stack/bench_stack.obj"]
+//! materials_by = "group"          # group | material | file | slope | single
+//!
+//! [materials.face]
+//! preset = "face_all"             # the seed paper's Table 2 rows
+//! [materials.floor]
+//! preset = "floor_all"
+//!
+//! [[sources]]
+//! type = "scatter"                # point | polyline | polygon | scatter
+//! material = "face"
+//! count = 1000
+//!
+//! [rocks]
+//! shapes = ["cube", "flat_box", "smartie"]
+//! mass_kg = [100.0, 10000.0]
+//!
+//! [simulation]
+//! seed = 1
+//!
+//! [output]
+//! cell_size_m = 2.0
+//! ```
+
+use crate::error::{Error, Result};
+use crate::random::TruncNormal;
+use crate::sim::SimParams;
+use crate::terrain::{Material, UpAxis};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// A scenario as written in its TOML file.
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioFile {
+    /// A title for reports.
+    #[serde(default)]
+    pub title: String,
+    /// The terrain.
+    pub terrain: TerrainSpec,
+    /// Materials by name.
+    pub materials: BTreeMap<String, MaterialSpec>,
+    /// Release zones.
+    pub sources: Vec<SourceSpec>,
+    /// The rocks (not needed when every source is a campaign, whose releases name their blocks).
+    pub rocks: Option<RockSpec>,
+    /// Engine settings and seed.
+    #[serde(default)]
+    pub simulation: SimulationSpec,
+    /// Output settings.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// How materials are assigned to terrain triangles.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MaterialsBy {
+    /// One material for everything (the only one defined, or the one named `default`).
+    #[default]
+    Single,
+    /// By OBJ object or group name.
+    Group,
+    /// By OBJ `usemtl` material name.
+    Material,
+    /// By file: each file's stem names its material (a quarry split into zone files).
+    File,
+    /// By slope: faces steeper than `slope_face_deg` are `face`, the rest `floor`.
+    Slope,
+}
+
+/// `[terrain]`.
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TerrainSpec {
+    /// Terrain files (OBJ, STL, GeoTIFF `.tif`/`.tiff`, ESRI ASCII `.asc`), relative to the scenario file. Several
+    /// files form one surface.
+    pub files: Vec<PathBuf>,
+    /// Which axis is up in the files (default: z).
+    #[serde(default)]
+    pub up: UpAxis,
+    /// EPSG code of the CRS, for outputs (default: taken from a GeoTIFF DEM, if any).
+    #[serde(default)]
+    pub crs_epsg: Option<u32>,
+    /// How triangles get their materials (default: single).
+    #[serde(default)]
+    pub materials_by: MaterialsBy,
+    /// With `materials_by = "slope"`: faces steeper than this are `face`, degrees (default: 45).
+    #[serde(default = "default_slope_face_deg")]
+    pub slope_face_deg: f64,
+    /// Renames: group, material or file name → material name (default: the same name).
+    #[serde(default)]
+    pub material_names: BTreeMap<String, String>,
+    /// Polygons that override the material of the triangles whose centre lies inside them, applied in order.
+    #[serde(default)]
+    pub zones: Vec<ZoneSpec>,
+}
+
+fn default_slope_face_deg() -> f64 {
+    45.0
+}
+
+/// `[[terrain.zones]]`: a polygon of another material.
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ZoneSpec {
+    /// Material name.
+    pub material: String,
+    /// Polygon vertices (x, y) in the terrain's horizontal frame.
+    pub polygon: Vec<[f64; 2]>,
+}
+
+/// `[materials.NAME]`: a Table 2 preset, explicit values, or a preset with some values overridden.
+#[derive(Debug, Clone, Default, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// One of `floor_bench`, `floor_haul_road`, `floor_all`, `face_weathered`, `face_fresh`, `face_all`.
+    pub preset: Option<String>,
+    /// Mean coefficient of restitution.
+    pub cr_mean: Option<f64>,
+    /// Its standard deviation.
+    pub cr_sd: Option<f64>,
+    /// Lower truncation (default: max(0, mean − 3 sd)).
+    pub cr_min: Option<f64>,
+    /// Upper truncation (default: min(1, mean + 3 sd)).
+    pub cr_max: Option<f64>,
+    /// Static friction angle, degrees.
+    pub static_friction_deg: Option<f64>,
+    /// Dynamic friction angle, degrees.
+    pub dynamic_friction_deg: Option<f64>,
+}
+
+/// `[[sources]]`.
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SourceSpec {
+    /// A name for outputs (default: `source_N`).
+    pub name: Option<String>,
+    /// `point`, `polyline`, `polygon` or `scatter`.
+    #[serde(rename = "type")]
+    pub kind: SourceKind,
+    /// Vertices (x, y) for point (one), polyline and polygon sources.
+    #[serde(default)]
+    pub points: Vec<[f64; 2]>,
+    /// Scatter: only triangles of this material.
+    pub material: Option<String>,
+    /// Scatter: only triangles at least this steep, degrees.
+    pub min_slope_deg: Option<f64>,
+    /// Scatter: only triangles at most this steep, degrees.
+    pub max_slope_deg: Option<f64>,
+    /// Scatter: only inside this polygon.
+    #[serde(default)]
+    pub within: Vec<[f64; 2]>,
+    /// Number of rocks from this source.
+    pub count: Option<usize>,
+    /// Polygon and scatter: rocks per m² of horizontal area instead of a count.
+    pub density_per_m2: Option<f64>,
+    /// Gap between the rock's lowest point and the ground at release, m (default: 0.1).
+    #[serde(default = "default_height_m")]
+    pub height_m: f64,
+    /// A fixed initial velocity (vx, vy, vz), m/s.
+    pub velocity_mps: Option<[f64; 3]>,
+    /// Or an initial speed range [min, max], m/s, pointing down the steepest slope under the release point.
+    pub speed_mps: Option<[f64; 2]>,
+    /// Initial spin magnitude range [min, max], rad/s, about a random axis (default: none).
+    pub spin_radps: Option<[f64; 2]>,
+    /// Campaign sources: the campaign folder (relative to the scenario), whose releases become point sources with
+    /// their own blocks, positions, velocities and spins.
+    pub campaign: Option<PathBuf>,
+    /// Campaign sources: rocks per release (default: 1).
+    pub repeats: Option<usize>,
+}
+
+fn default_height_m() -> f64 {
+    0.1
+}
+
+/// Source geometry.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SourceKind {
+    /// One point.
+    Point,
+    /// Uniformly along a polyline.
+    Polyline,
+    /// Uniformly over a polygon's horizontal area.
+    Polygon,
+    /// Uniformly over the surface area of the triangles selected by material, slope and polygon.
+    Scatter,
+    /// The releases of a field campaign (see [`crate::campaign`]).
+    Campaign,
+}
+
+/// `[rocks]`.
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RockSpec {
+    /// Shapes, drawn uniformly per rock: `cube`, `flat_box`, `smartie`, or a hull file (OBJ, STL or points).
+    pub shapes: Vec<String>,
+    /// Mass, kg: one value, or [min, max] drawn log-uniformly per rock.
+    pub mass_kg: Option<MassSpec>,
+    /// Or bounding dimensions (a, b, c), m; with one `mass_kg` as well, the density is set to match it.
+    pub dimensions_m: Option<[f64; 3]>,
+    /// Density, kg/m³ (default: 2650).
+    #[serde(default = "default_density")]
+    pub density_kg_m3: f64,
+}
+
+fn default_density() -> f64 {
+    crate::rock::DEFAULT_DENSITY_KG_M3
+}
+
+/// One mass or a range.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, serde::Serialize)]
+#[serde(untagged)]
+pub enum MassSpec {
+    /// A fixed mass.
+    One(f64),
+    /// [min, max], drawn log-uniformly.
+    Range([f64; 2]),
+}
+
+/// `[simulation]`: the seed, an optional total rock count and the engine settings.
+#[derive(Debug, Clone, Default, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimulationSpec {
+    /// Seed of all random draws (default: 1).
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Total rocks; if set, the sources' counts are scaled to it.
+    pub rocks: Option<usize>,
+    /// Threads (default: all cores).
+    pub threads: Option<usize>,
+    /// Engine settings.
+    #[serde(flatten)]
+    pub params: SimParams,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// `[output]`.
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputSpec {
+    /// Raster cell size, m (default: 2).
+    pub cell_size_m: f64,
+    /// Kernel radius of the end-point density, m (default: 2 cells).
+    pub endpoint_bandwidth_m: Option<f64>,
+    /// Paths of this many rocks (the first ones) as CSV and VTK (default: 0).
+    pub paths: usize,
+}
+
+impl Default for OutputSpec {
+    fn default() -> Self {
+        OutputSpec { cell_size_m: 2.0, endpoint_bandwidth_m: None, paths: 0 }
+    }
+}
+
+/// A checked scenario with absolute paths and built materials.
+#[derive(Debug, Clone)]
+pub struct Scenario {
+    /// The scenario file.
+    pub path: PathBuf,
+    /// As written, with overrides applied (for the run manifest).
+    pub file: ScenarioFile,
+    /// Terrain files, absolute.
+    pub terrain_files: Vec<PathBuf>,
+    /// Materials, in name order.
+    pub materials: Vec<Material>,
+    /// Rock shape entries: built-in name or absolute hull path.
+    pub shapes: Vec<ShapeRef>,
+}
+
+/// A rock shape as the scenario names it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ShapeRef {
+    /// `cube`, `flat_box` or `smartie`.
+    Builtin(String),
+    /// A hull file.
+    Hull(PathBuf),
+}
+
+impl ScenarioFile {
+    /// Reads and parses `path` (no checks beyond the TOML structure).
+    pub fn read(path: &Path) -> Result<ScenarioFile> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        toml::from_str(&text).map_err(|e| {
+            let line = e.span().map(|s| text[..s.start].lines().count().max(1));
+            let location = match line {
+                Some(l) => format!("{}:{l}", path.display()),
+                None => path.display().to_string(),
+            };
+            Error::format(
+                location,
+                e.message().to_string(),
+                "see the scenario format in README.md (every key is listed there); keys are case-sensitive",
+            )
+        })
+    }
+
+    /// Checks every value and resolves paths relative to the scenario file at `path`.
+    pub fn resolve(self, path: &Path) -> Result<Scenario> {
+        let base = path.parent().unwrap_or(Path::new("."));
+        let f = |k: &str| format!("{}: {k}", path.display());
+        if self.terrain.files.is_empty() {
+            return Err(Error::invalid(f("terrain.files"), "is empty", "list at least one terrain file"));
+        }
+        let terrain_files: Vec<PathBuf> = self.terrain.files.iter().map(|p| base.join(p)).collect();
+        for (i, p) in terrain_files.iter().enumerate() {
+            if !p.is_file() {
+                return Err(Error::invalid(
+                    f(&format!("terrain.files[{i}]")),
+                    format!("{} does not exist", p.display()),
+                    "paths are relative to the scenario file",
+                ));
+            }
+        }
+        if !(self.terrain.slope_face_deg > 0.0 && self.terrain.slope_face_deg < 90.0) {
+            return Err(Error::invalid(f("terrain.slope_face_deg"), format!("must be in (0, 90), got {}", self.terrain.slope_face_deg), "use e.g. 45"));
+        }
+        if self.materials.is_empty() {
+            return Err(Error::invalid(f("materials"), "no material is defined", "add e.g. [materials.default] with preset = \"face_all\""));
+        }
+        let mut materials = Vec::new();
+        for (name, spec) in &self.materials {
+            materials.push(spec.build(name, &f(&format!("materials.{name}")))?);
+        }
+        let known = |m: &str| self.materials.contains_key(m);
+        for (from, to) in &self.terrain.material_names {
+            if !known(to) {
+                return Err(Error::invalid(
+                    f(&format!("terrain.material_names.{from}")),
+                    format!("names material '{to}', which is not defined"),
+                    format!("define [materials.{to}] or use one of: {}", self.materials.keys().cloned().collect::<Vec<_>>().join(", ")),
+                ));
+            }
+        }
+        if self.terrain.materials_by == MaterialsBy::Slope {
+            for m in ["face", "floor"] {
+                if !known(m) {
+                    return Err(Error::invalid(f("materials"), format!("materials_by = \"slope\" needs a material named '{m}'"), format!("add [materials.{m}]")));
+                }
+            }
+        }
+        if self.terrain.materials_by == MaterialsBy::Single && self.materials.len() > 1 && !known("default") {
+            return Err(Error::invalid(
+                f("terrain.materials_by"),
+                "is \"single\" (the default) but several materials are defined and none is named 'default'",
+                "set materials_by to group, material, file or slope, or name the material 'default'",
+            ));
+        }
+        for (i, z) in self.terrain.zones.iter().enumerate() {
+            if !known(&z.material) {
+                return Err(Error::invalid(f(&format!("terrain.zones[{i}].material")), format!("'{}' is not defined", z.material), "define it under [materials]"));
+            }
+            check_polygon(&f(&format!("terrain.zones[{i}].polygon")), &z.polygon)?;
+        }
+        if self.sources.is_empty() {
+            return Err(Error::invalid(f("sources"), "no source is defined", "add a [[sources]] table"));
+        }
+        let mut file = self;
+        for (i, s) in file.sources.iter_mut().enumerate() {
+            s.check(&f(&format!("sources[{i}]")), &|m| file.materials.contains_key(m))?;
+            if let Some(c) = &s.campaign {
+                let dir = base.join(c);
+                if !dir.join("release_points.csv").is_file() {
+                    return Err(Error::invalid(
+                        f(&format!("sources[{i}].campaign")),
+                        format!("{} has no release_points.csv", dir.display()),
+                        "point to a campaign folder (relative to the scenario file)",
+                    ));
+                }
+                s.campaign = Some(dir);
+            }
+        }
+        let this = file;
+        let shapes = match &this.rocks {
+            Some(r) => r.check(&f("rocks"), base)?,
+            None if this.sources.iter().all(|s| s.kind == SourceKind::Campaign) => Vec::new(),
+            None => return Err(Error::invalid(f("rocks"), "is missing", "add a [rocks] table with shapes and mass_kg")),
+        };
+        this.simulation.params.validate(&f("simulation."))?;
+        if this.simulation.rocks == Some(0) {
+            return Err(Error::invalid(f("simulation.rocks"), "is 0", "give at least 1 rock"));
+        }
+        if this.simulation.threads == Some(0) {
+            return Err(Error::invalid(f("simulation.threads"), "is 0", "give at least 1 thread, or leave it out to use all cores"));
+        }
+        if !(this.output.cell_size_m.is_finite() && this.output.cell_size_m > 0.0) {
+            return Err(Error::invalid(f("output.cell_size_m"), format!("must be positive, got {}", this.output.cell_size_m), "use e.g. 2"));
+        }
+        if let Some(b) = this.output.endpoint_bandwidth_m {
+            if !(b.is_finite() && b > 0.0) {
+                return Err(Error::invalid(f("output.endpoint_bandwidth_m"), format!("must be positive, got {b}"), "use about 2 cell sizes"));
+            }
+        }
+        Ok(Scenario { path: path.to_path_buf(), file: this, terrain_files, materials, shapes })
+    }
+}
+
+impl MaterialSpec {
+    /// Builds the material named `name`; `field` locates it in errors.
+    pub fn build(&self, name: &str, field: &str) -> Result<Material> {
+        let mut m = match &self.preset {
+            Some(p) => Material::preset(p).ok_or_else(|| {
+                let names: Vec<&str> = crate::terrain::material::TABLE2_PRESETS.iter().map(|p| p.0).collect();
+                Error::invalid(format!("{field}.preset"), format!("unknown preset '{p}'"), format!("use one of: {}", names.join(", ")))
+            })?,
+            None => {
+                let need = |v: Option<f64>, k: &str| {
+                    v.ok_or_else(|| Error::invalid(format!("{field}.{k}"), "is missing", "give it, or use a preset (e.g. preset = \"face_all\")"))
+                };
+                let mean = need(self.cr_mean, "cr_mean")?;
+                Material {
+                    name: String::new(),
+                    cr: TruncNormal::three_sigma(mean, self.cr_sd.unwrap_or(0.0), 0.0, 1.0),
+                    static_friction_deg: need(self.static_friction_deg, "static_friction_deg")?,
+                    dynamic_friction_deg: need(self.dynamic_friction_deg, "dynamic_friction_deg")?,
+                }
+            }
+        };
+        m.name = name.to_string();
+        if self.preset.is_some() && (self.cr_mean.is_some() || self.cr_sd.is_some()) {
+            m.cr = TruncNormal::three_sigma(self.cr_mean.unwrap_or(m.cr.mean), self.cr_sd.unwrap_or(m.cr.sd), 0.0, 1.0);
+        }
+        if let Some(v) = self.static_friction_deg {
+            m.static_friction_deg = v;
+        }
+        if let Some(v) = self.dynamic_friction_deg {
+            m.dynamic_friction_deg = v;
+        }
+        if let Some(v) = self.cr_min {
+            m.cr.min = v;
+        }
+        if let Some(v) = self.cr_max {
+            m.cr.max = v;
+        }
+        m.validate(field)?;
+        Ok(m)
+    }
+}
+
+fn check_polygon(field: &str, pts: &[[f64; 2]]) -> Result<()> {
+    if pts.len() < 3 {
+        return Err(Error::invalid(field, format!("has {} vertices", pts.len()), "give at least 3 [x, y] vertices"));
+    }
+    check_finite(field, pts)
+}
+
+fn check_finite(field: &str, pts: &[[f64; 2]]) -> Result<()> {
+    if let Some(i) = pts.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+        return Err(Error::invalid(format!("{field}[{i}]"), "is not a finite [x, y] pair", "give plain numbers"));
+    }
+    Ok(())
+}
+
+impl SourceSpec {
+    fn check(&self, field: &str, known: &dyn Fn(&str) -> bool) -> Result<()> {
+        let n = self.points.len();
+        match self.kind {
+            SourceKind::Point if n != 1 => {
+                return Err(Error::invalid(format!("{field}.points"), format!("a point source needs 1 point, got {n}"), "give points = [[x, y]]"))
+            }
+            SourceKind::Polyline if n < 2 => {
+                return Err(Error::invalid(format!("{field}.points"), format!("a polyline needs at least 2 points, got {n}"), "give points = [[x1, y1], [x2, y2], ...]"))
+            }
+            SourceKind::Polygon => check_polygon(&format!("{field}.points"), &self.points)?,
+            _ => {}
+        }
+        check_finite(&format!("{field}.points"), &self.points)?;
+        if !self.within.is_empty() {
+            check_polygon(&format!("{field}.within"), &self.within)?;
+        }
+        if let Some(m) = &self.material {
+            if !known(m) {
+                return Err(Error::invalid(format!("{field}.material"), format!("'{m}' is not defined"), "name a material defined under [materials]"));
+            }
+        }
+        if self.kind == SourceKind::Campaign {
+            if self.campaign.is_none() {
+                return Err(Error::invalid(format!("{field}.campaign"), "is missing", "give the campaign folder, e.g. campaign = \"../meshes/tschamut2014\""));
+            }
+            if self.repeats == Some(0) {
+                return Err(Error::invalid(format!("{field}.repeats"), "is 0", "give at least 1 rock per release"));
+            }
+            return Ok(());
+        }
+        match (self.count, self.density_per_m2) {
+            (Some(_), Some(_)) => return Err(Error::invalid(field, "has both count and density_per_m2", "keep one of them")),
+            (None, None) => return Err(Error::invalid(field, "has neither count nor density_per_m2", "give count = N (or density_per_m2 for polygon and scatter sources)")),
+            (None, Some(d)) => {
+                if !matches!(self.kind, SourceKind::Polygon | SourceKind::Scatter) {
+                    return Err(Error::invalid(format!("{field}.density_per_m2"), "only applies to polygon and scatter sources", "use count"));
+                }
+                if !(d.is_finite() && d > 0.0) {
+                    return Err(Error::invalid(format!("{field}.density_per_m2"), format!("must be positive, got {d}"), "give rocks per m², e.g. 0.01"));
+                }
+            }
+            (Some(_), None) => {}
+        }
+        if !(self.height_m.is_finite() && self.height_m >= 0.0) {
+            return Err(Error::invalid(format!("{field}.height_m"), format!("must be 0 or more, got {}", self.height_m), "give the release gap in m, e.g. 0.1"));
+        }
+        if self.velocity_mps.is_some() && self.speed_mps.is_some() {
+            return Err(Error::invalid(field, "has both velocity_mps and speed_mps", "keep one of them"));
+        }
+        if let Some(v) = self.velocity_mps {
+            if !v.iter().all(|x| x.is_finite()) {
+                return Err(Error::invalid(format!("{field}.velocity_mps"), "is not finite", "give [vx, vy, vz] in m/s"));
+            }
+        }
+        for (k, r) in [("speed_mps", self.speed_mps), ("spin_radps", self.spin_radps)] {
+            if let Some([a, b]) = r {
+                if !(a.is_finite() && b.is_finite() && 0.0 <= a && a <= b) {
+                    return Err(Error::invalid(format!("{field}.{k}"), format!("[{a}, {b}] is not a range of non-negative values"), "give [min, max] with 0 <= min <= max"));
+                }
+            }
+        }
+        for (k, v) in [("min_slope_deg", self.min_slope_deg), ("max_slope_deg", self.max_slope_deg)] {
+            if let Some(v) = v {
+                if !(0.0..=90.0).contains(&v) {
+                    return Err(Error::invalid(format!("{field}.{k}"), format!("must be in [0, 90], got {v}"), "give a slope in degrees"));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl RockSpec {
+    fn check(&self, field: &str, base: &Path) -> Result<Vec<ShapeRef>> {
+        if self.shapes.is_empty() {
+            return Err(Error::invalid(format!("{field}.shapes"), "is empty", "list shapes, e.g. [\"cube\", \"flat_box\", \"smartie\"]"));
+        }
+        let mut out = Vec::new();
+        for (i, s) in self.shapes.iter().enumerate() {
+            if crate::rock::ShapeKind::builtin(s).is_some() {
+                out.push(ShapeRef::Builtin(s.clone()));
+            } else {
+                let p = base.join(s);
+                if !p.is_file() {
+                    return Err(Error::invalid(
+                        format!("{field}.shapes[{i}]"),
+                        format!("'{s}' is neither a built-in shape nor an existing hull file"),
+                        "use cube, flat_box, smartie, or a path (relative to the scenario) to an OBJ, STL or point file",
+                    ));
+                }
+                out.push(ShapeRef::Hull(p));
+            }
+        }
+        let positive = |k: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::invalid(format!("{field}.{k}"), format!("must be positive, got {v}"), "give a positive value"))
+            }
+        };
+        positive("density_kg_m3", self.density_kg_m3)?;
+        match (self.mass_kg, self.dimensions_m) {
+            (Some(MassSpec::Range(_)), Some(_)) => {
+                return Err(Error::invalid(field, "has a mass range together with dimensions_m", "give dimensions_m with one mass_kg (or none, to use the density), or a mass range alone"))
+            }
+            (None, None) => return Err(Error::invalid(field, "has neither mass_kg nor dimensions_m", "give mass_kg = 1000 (or [100, 10000]), or dimensions_m = [a, b, c]")),
+            (Some(MassSpec::One(m)), _) => positive("mass_kg", m)?,
+            (Some(MassSpec::Range([a, b])), _) => {
+                positive("mass_kg", a)?;
+                positive("mass_kg", b)?;
+                if a > b {
+                    return Err(Error::invalid(format!("{field}.mass_kg"), format!("range [{a}, {b}] is reversed"), "give [min, max]"));
+                }
+            }
+            (None, Some(d)) => {
+                for v in d {
+                    positive("dimensions_m", v)?;
+                }
+            }
+        }
+        Ok(out)
+    }
+}

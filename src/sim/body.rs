@@ -1,0 +1,90 @@
+//! Rigid-body state and torque-free rotation.
+//!
+//! Angular velocity is kept in the body (principal) frame, where the inertia is diagonal. Free rotation uses the
+//! implicit midpoint rule Θ(Ω₁ − Ω₀) + Δt Ω½ × (Θ Ω½) = 0, which conserves rotational energy and the magnitude of
+//! angular momentum exactly, and so keeps the spin of platy rocks stable about their intermediate axis; a fully
+//! explicit update does not and under-predicts their run-out (Leine et al. 2021, physics.md §6). Orientation moves
+//! by the exponential map of the midpoint angular velocity, which preserves unit length.
+
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+
+/// State of one rock: centre of mass, velocity, orientation (body → world) and body-frame angular velocity.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigidState {
+    /// Centre of mass, m (terrain local frame).
+    pub position_m: Vector3<f64>,
+    /// Velocity of the centre of mass, m/s.
+    pub velocity_mps: Vector3<f64>,
+    /// Orientation, body frame to world frame.
+    pub orientation: UnitQuaternion<f64>,
+    /// Angular velocity in the body frame, rad/s.
+    pub omega_body_radps: Vector3<f64>,
+}
+
+impl RigidState {
+    /// Angular velocity in the world frame, rad/s.
+    pub fn omega_world_radps(&self) -> Vector3<f64> {
+        self.orientation * self.omega_body_radps
+    }
+
+    /// Translational kinetic energy, J.
+    pub fn translational_energy_j(&self, mass_kg: f64) -> f64 {
+        0.5 * mass_kg * self.velocity_mps.norm_squared()
+    }
+
+    /// Rotational kinetic energy, J.
+    pub fn rotational_energy_j(&self, inertia_kg_m2: &Vector3<f64>) -> f64 {
+        0.5 * self.omega_body_radps.component_mul(inertia_kg_m2).dot(&self.omega_body_radps)
+    }
+}
+
+/// One implicit-midpoint step of Euler's torque-free equations in the body frame. Returns (Ω₁, Ω½).
+/// Solved by Newton's method on Ω½ (converges in a few iterations for any step where |Ω|Δt is below about 1).
+pub fn free_rotation_step(omega0: &Vector3<f64>, inertia: &Vector3<f64>, dt_s: f64) -> (Vector3<f64>, Vector3<f64>) {
+    let th = Matrix3::from_diagonal(inertia);
+    let mut half = *omega0;
+    for _ in 0..8 {
+        let l = inertia.component_mul(&half);
+        let f = 2.0 * inertia.component_mul(&(half - omega0)) + dt_s * half.cross(&l);
+        if f.norm() <= 1e-15 * (1.0 + l.norm()) {
+            break;
+        }
+        let jac = 2.0 * th + dt_s * (half.cross_matrix() * th - l.cross_matrix());
+        match jac.lu().solve(&f) {
+            Some(d) => half -= d,
+            None => break,
+        }
+    }
+    (2.0 * half - omega0, half)
+}
+
+/// Rotates `q` (body → world) by a body-frame angular velocity `omega_body` held for `dt_s`.
+pub fn rotate(q: &UnitQuaternion<f64>, omega_body: &Vector3<f64>, dt_s: f64) -> UnitQuaternion<f64> {
+    let mut r = *q * UnitQuaternion::from_scaled_axis(omega_body * dt_s);
+    r.renormalize();
+    r
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn implicit_midpoint_conserves_energy_and_momentum_and_keeps_intermediate_axis_spin_bounded() {
+        let inertia = Vector3::new(1.0, 2.0, 3.0);
+        // Spin mostly about the stable major axis with a perturbation.
+        let mut w = Vector3::new(0.01, 0.0, 5.0);
+        let e0 = w.component_mul(&inertia).dot(&w);
+        let mut q = UnitQuaternion::identity();
+        let l0 = (q * inertia.component_mul(&w)).norm();
+        for _ in 0..20000 {
+            let (w1, half) = free_rotation_step(&w, &inertia, 0.002);
+            q = rotate(&q, &half, 0.002);
+            w = w1;
+        }
+        let e1 = w.component_mul(&inertia).dot(&w);
+        assert!((e1 - e0).abs() < 1e-9 * e0, "{e0} {e1}");
+        assert!(((q * inertia.component_mul(&w)).norm() - l0).abs() < 1e-9 * l0);
+        assert!(w.z.abs() > 4.9, "major-axis spin must stay stable: {w:?}");
+    }
+}

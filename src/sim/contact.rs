@@ -1,0 +1,209 @@
+//! Contacts between a rock and the ground, and the impulses that resolve them.
+//!
+//! **Detection** (physics.md §8): a hull vertex is in contact when it lies below the surface under it; the normal is
+//! that of the triangle there, the depth the distance to its plane. This is RAMMS's vertex-versus-terrain contact
+//! (Leine et al. 2014).
+//!
+//! **Impulses** (physics.md §1.2, §8): all contacts of a step are solved together by projected Gauss–Seidel on the
+//! contact impulses, sweeping forward and backward alternately until the impulses stop changing, so that a cube
+//! landing flat gets four equal impulses and no spin. Each contact gets:
+//! - a Newton restitution target u_n⁺ ≥ −Cr·u_n⁻ when its approach speed −u_n⁻ exceeds the bounce threshold, and
+//!   u_n⁺ ≥ 0 otherwise (resting or rolling contact);
+//! - Coulomb friction |P_t| ≤ μ·P_n aiming at zero slip, with μ = tan φ_static while the contact sticks (slip speed
+//!   below `stick_speed_mps` before the step) and tan φ_dynamic while it slips.
+//!
+//! Newton restitution with friction can create energy (physics.md §1.1), so the solution is checked: if the kinetic
+//! energy after the impulses exceeds that before, the step is solved again with Cr = 0, which cannot.
+
+use crate::rock::RockBody;
+use nalgebra::{Matrix2, UnitQuaternion, Vector2, Vector3};
+
+/// One vertex–ground contact at the step's midpoint configuration.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact {
+    /// Index of the rock's hull vertex.
+    pub vertex: usize,
+    /// World position of the vertex, m.
+    pub point_m: Vector3<f64>,
+    /// Upward unit normal of the ground.
+    pub normal: Vector3<f64>,
+    /// Penetration depth along the normal, m (≥ 0).
+    pub depth_m: f64,
+    /// Ground triangle.
+    pub triangle: u32,
+    /// Restitution coefficient for this contact.
+    pub cr: f64,
+    /// tan of the static friction angle.
+    pub mu_static: f64,
+    /// tan of the dynamic friction angle.
+    pub mu_dynamic: f64,
+}
+
+/// Velocities of a rock: centre-of-mass velocity (world) and angular velocity (body frame).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Velocities {
+    /// m/s, world frame.
+    pub linear_mps: Vector3<f64>,
+    /// rad/s, body frame.
+    pub angular_body_radps: Vector3<f64>,
+}
+
+impl Velocities {
+    /// Kinetic energy, J.
+    pub fn kinetic_energy_j(&self, rock: &RockBody) -> f64 {
+        let w = &self.angular_body_radps;
+        0.5 * rock.mass_kg * self.linear_mps.norm_squared() + 0.5 * w.component_mul(&rock.inertia_kg_m2).dot(w)
+    }
+}
+
+/// What the solver did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SolveReport {
+    /// Sweeps used.
+    pub iterations: usize,
+    /// True if the energy guard re-solved the step with Cr = 0.
+    pub energy_guard: bool,
+    /// Largest approach speed −u_n⁻ among the contacts, m/s.
+    pub max_approach_mps: f64,
+}
+
+/// Solver settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SolverSettings {
+    /// Approach speed below which no bounce is applied, m/s.
+    pub bounce_threshold_mps: f64,
+    /// Slip speed below which static friction applies, m/s.
+    pub stick_speed_mps: f64,
+    /// Most sweeps.
+    pub max_iterations: usize,
+}
+
+/// Per-contact rows in body-frame form: u_d = v·d + Ω·J_d for d in (n, t1, t2).
+struct Row {
+    n: Vector3<f64>,
+    t1: Vector3<f64>,
+    t2: Vector3<f64>,
+    jn: Vector3<f64>,
+    jt1: Vector3<f64>,
+    jt2: Vector3<f64>,
+    /// Θ⁻¹ J for each direction.
+    mn: Vector3<f64>,
+    mt1: Vector3<f64>,
+    mt2: Vector3<f64>,
+    k_nn: f64,
+    k_tt: Matrix2<f64>,
+    k_tt_inv: Matrix2<f64>,
+    target: f64,
+    mu: f64,
+    lambda_n: f64,
+    lambda_t: Vector2<f64>,
+}
+
+/// Resolves `contacts` for a rock at orientation `q` (the step's midpoint). `before` are the velocities at the start
+/// of the step (they set the restitution targets), `free` those after gravity and free rotation over the step.
+/// Returns the velocities at the end of the step.
+pub fn solve(
+    rock: &RockBody,
+    q: &UnitQuaternion<f64>,
+    contacts: &[Contact],
+    before: &Velocities,
+    free: &Velocities,
+    settings: &SolverSettings,
+) -> (Velocities, SolveReport) {
+    let inv_m = 1.0 / rock.mass_kg;
+    let inv_i = rock.inertia_kg_m2.map(|v| 1.0 / v);
+    let mut max_approach = 0.0f64;
+    let mut rows: Vec<Row> = contacts
+        .iter()
+        .map(|c| {
+            let n = c.normal;
+            let t1 = any_perpendicular(&n);
+            let t2 = n.cross(&t1);
+            let b = rock.vertices_m[c.vertex];
+            let to_body = |d: &Vector3<f64>| q.inverse_transform_vector(d);
+            let (jn, jt1, jt2) = (b.cross(&to_body(&n)), b.cross(&to_body(&t1)), b.cross(&to_body(&t2)));
+            let (mn, mt1, mt2) = (jn.component_mul(&inv_i), jt1.component_mul(&inv_i), jt2.component_mul(&inv_i));
+            let k_nn = inv_m + jn.dot(&mn);
+            let k_tt = Matrix2::new(inv_m + jt1.dot(&mt1), jt1.dot(&mt2), jt2.dot(&mt1), inv_m + jt2.dot(&mt2));
+            let k_tt_inv = k_tt.try_inverse().unwrap_or_else(Matrix2::zeros);
+            let u = |v: &Velocities, d: &Vector3<f64>, j: &Vector3<f64>| v.linear_mps.dot(d) + v.angular_body_radps.dot(j);
+            let un = u(before, &n, &jn);
+            let slip = Vector2::new(u(before, &t1, &jt1), u(before, &t2, &jt2)).norm();
+            max_approach = max_approach.max(-un);
+            let target = if -un > settings.bounce_threshold_mps { -c.cr * un } else { 0.0 };
+            let mu = if slip < settings.stick_speed_mps { c.mu_static } else { c.mu_dynamic };
+            Row { n, t1, t2, jn, jt1, jt2, mn, mt1, mt2, k_nn, k_tt, k_tt_inv, target, mu, lambda_n: 0.0, lambda_t: Vector2::zeros() }
+        })
+        .collect();
+    let (after, iterations) = sweep(&mut rows, free, inv_m, settings.max_iterations);
+    let mut report = SolveReport { iterations, energy_guard: false, max_approach_mps: max_approach };
+    let e_free = free.kinetic_energy_j(rock);
+    if after.kinetic_energy_j(rock) > e_free * (1.0 + 1e-12) + 1e-12 {
+        for r in rows.iter_mut() {
+            r.target = 0.0;
+            r.lambda_n = 0.0;
+            r.lambda_t = Vector2::zeros();
+        }
+        let (again, it2) = sweep(&mut rows, free, inv_m, settings.max_iterations);
+        report.iterations += it2;
+        report.energy_guard = true;
+        return (again, report);
+    }
+    (after, report)
+}
+
+fn sweep(rows: &mut [Row], free: &Velocities, inv_m: f64, max_iterations: usize) -> (Velocities, usize) {
+    let mut v = free.linear_mps;
+    let mut w = free.angular_body_radps;
+    let n = rows.len();
+    let mut used = 0;
+    for it in 0..max_iterations {
+        used = it + 1;
+        let mut change = 0.0f64;
+        let mut scale = 1e-12f64;
+        for k in 0..n {
+            let r = if it % 2 == 0 { &mut rows[k] } else { &mut rows[n - 1 - k] };
+            // Normal impulse.
+            let un = v.dot(&r.n) + w.dot(&r.jn);
+            let new_n = (r.lambda_n + (r.target - un) / r.k_nn).max(0.0);
+            let dn = new_n - r.lambda_n;
+            r.lambda_n = new_n;
+            v += r.n * (dn * inv_m);
+            w += r.mn * dn;
+            // Friction impulse: the sticking impulse if it lies in the disc |λ_t| ≤ μ λ_n, otherwise Coulomb sliding
+            // with the impulse opposite to the slip velocity that results (max dissipation, not a radial projection,
+            // which would skew the friction direction whenever rotation makes K_tt anisotropic).
+            let ut = Vector2::new(v.dot(&r.t1) + w.dot(&r.jt1), v.dot(&r.t2) + w.dot(&r.jt2));
+            let u0 = ut - r.k_tt * r.lambda_t;
+            let mut lt = -(r.k_tt_inv * u0);
+            let cap = r.mu * r.lambda_n;
+            if lt.norm() > cap {
+                let mut dir = u0.try_normalize(1e-300).unwrap_or_else(|| -lt.normalize());
+                for _ in 0..4 {
+                    let slip = u0 - r.k_tt * dir * cap;
+                    match slip.try_normalize(1e-300) {
+                        Some(d) => dir = d,
+                        None => break,
+                    }
+                }
+                lt = -dir * cap;
+            }
+            let dt = lt - r.lambda_t;
+            r.lambda_t = lt;
+            v += (r.t1 * dt.x + r.t2 * dt.y) * inv_m;
+            w += r.mt1 * dt.x + r.mt2 * dt.y;
+            change = change.max(dn.abs()).max(dt.x.abs()).max(dt.y.abs());
+            scale = scale.max(r.lambda_n);
+        }
+        if change <= 1e-10 * scale {
+            break;
+        }
+    }
+    (Velocities { linear_mps: v, angular_body_radps: w }, used)
+}
+
+/// A unit vector perpendicular to unit `n`.
+fn any_perpendicular(n: &Vector3<f64>) -> Vector3<f64> {
+    let a = if n.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    (a - n * n.dot(&a)).normalize()
+}

@@ -1,0 +1,453 @@
+//! One rock from release to rest: the 3DRB time loop.
+//!
+//! Near the ground, each step of `dt_s` is a Moreau midpoint step (Leine et al. 2014, physics.md §1.2 and §6):
+//! move half a step, find the contacts there, solve the impulses together ([`super::contact`]), move the second half
+//! with the new velocities. Rotation between contacts follows the implicit midpoint rule ([`super::body`]).
+//! Clear of the ground, the rock moves in long exact ballistic steps: a step is taken only if the bounding sphere,
+//! swept along the parabola, stays above an upper bound of the ground under it (conservative advancement,
+//! physics.md §6), so nothing is tunnelled through however fast the rock goes.
+//!
+//! The loop ends with an explicit reason: `stopped` (speed and spin below the rest thresholds for the rest
+//! duration), `left_terrain` (no surface under the centre of mass), or `max_time`.
+
+use super::body::{free_rotation_step, rotate, RigidState};
+use super::contact::{solve, Contact, SolverSettings, Velocities};
+use super::params::{CrDraw, SimParams};
+use crate::random::Rng;
+use crate::rock::RockBody;
+use crate::terrain::Terrain;
+use nalgebra::{UnitQuaternion, Vector3};
+
+/// Gravity, m/s² (standard gravity, pointing down −z).
+pub const GRAVITY_MPS2: f64 = 9.80665;
+
+/// Why a rock's run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StopReason {
+    /// At rest on the ground.
+    Stopped,
+    /// No surface under the rock (outside the terrain or over a nodata hole).
+    LeftTerrain,
+    /// The simulated time limit was reached.
+    MaxTime,
+}
+
+impl StopReason {
+    /// The name written to outputs.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            StopReason::Stopped => "stopped",
+            StopReason::LeftTerrain => "left_terrain",
+            StopReason::MaxTime => "max_time",
+        }
+    }
+
+    /// All reasons, in output order.
+    pub const ALL: [StopReason; 3] = [StopReason::Stopped, StopReason::LeftTerrain, StopReason::MaxTime];
+}
+
+/// A point of the path, emitted about every `sample_spacing_m` of horizontal travel (and at least every 0.1 s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Time since release, s.
+    pub t_s: f64,
+    /// Centre of mass, m (local frame).
+    pub position_m: Vector3<f64>,
+    /// Velocity, m/s.
+    pub velocity_mps: Vector3<f64>,
+    /// Angular speed, rad/s.
+    pub spin_radps: f64,
+    /// Translational kinetic energy, J.
+    pub translational_j: f64,
+    /// Total (translational + rotational) kinetic energy, J.
+    pub kinetic_j: f64,
+    /// Height of the rock's lowest point above the ground under its centre of mass, measured vertically, m (≥ 0).
+    pub clearance_m: f64,
+    /// True if the rock touched the ground in the step that produced the sample.
+    pub in_contact: bool,
+}
+
+/// An impact: a step in which a hull vertex newly touched the ground faster than the bounce threshold.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Impact {
+    /// Time, s.
+    pub t_s: f64,
+    /// Contact point, m (local frame).
+    pub point_m: Vector3<f64>,
+    /// Ground normal.
+    pub normal: Vector3<f64>,
+    /// Ground triangle.
+    pub triangle: u32,
+    /// Normal approach speed of the contact point, m/s.
+    pub approach_speed_mps: f64,
+    /// Speed of the centre of mass before the impact, m/s.
+    pub speed_mps: f64,
+    /// Angle between the incoming centre-of-mass velocity and the ground plane, degrees.
+    pub impact_angle_deg: f64,
+    /// Restitution coefficient used.
+    pub cr: f64,
+    /// Kinetic energy before the impulses (after the step's gravity), J.
+    pub kinetic_before_j: f64,
+    /// Kinetic energy after the impulses, J.
+    pub kinetic_after_j: f64,
+    /// True if the energy guard had to re-solve with Cr = 0.
+    pub energy_guard: bool,
+}
+
+/// Receives a rock's path as it is computed, so that rasters, collectors and diagnostics never need the whole
+/// trajectory in memory.
+pub trait Observer {
+    /// A path sample.
+    fn sample(&mut self, _sample: &Sample) {}
+    /// An impact.
+    fn impact(&mut self, _impact: &Impact) {}
+}
+
+impl Observer for () {}
+
+impl<A: Observer, B: Observer> Observer for (A, B) {
+    fn sample(&mut self, s: &Sample) {
+        self.0.sample(s);
+        self.1.sample(s);
+    }
+    fn impact(&mut self, i: &Impact) {
+        self.0.impact(i);
+        self.1.impact(i);
+    }
+}
+
+impl<O: Observer> Observer for Option<O> {
+    fn sample(&mut self, s: &Sample) {
+        if let Some(o) = self {
+            o.sample(s)
+        }
+    }
+    fn impact(&mut self, i: &Impact) {
+        if let Some(o) = self {
+            o.impact(i)
+        }
+    }
+}
+
+/// The result of one rock's run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Outcome {
+    /// State at the end.
+    pub final_state: RigidState,
+    /// Why it ended.
+    pub stop_reason: StopReason,
+    /// Simulated time, s.
+    pub travel_time_s: f64,
+    /// Largest total kinetic energy, J.
+    pub max_kinetic_j: f64,
+    /// Largest clearance of the lowest point above the ground, m.
+    pub max_bounce_m: f64,
+    /// Number of impacts.
+    pub impacts: u32,
+    /// Steps taken near the ground (a cost measure).
+    pub contact_steps: u64,
+    /// Times the energy guard fired.
+    pub energy_guards: u32,
+}
+
+/// Runs one rock from `start` until it stops. `rng` supplies the restitution draws.
+pub fn simulate(
+    terrain: &Terrain,
+    rock: &RockBody,
+    start: RigidState,
+    params: &SimParams,
+    rng: &mut Rng,
+    observer: &mut impl Observer,
+) -> Outcome {
+    Run::new(terrain, rock, start, params, rng).go(observer)
+}
+
+struct Run<'a> {
+    terrain: &'a Terrain,
+    rock: &'a RockBody,
+    params: &'a SimParams,
+    rng: &'a mut Rng,
+    s: RigidState,
+    t: f64,
+    cr: Vec<f64>,
+    touching: Vec<bool>,
+    contacts: Vec<Contact>,
+    last_sample: Option<(Vector3<f64>, f64)>,
+    out: Outcome,
+    settings: SolverSettings,
+}
+
+const GRAVITY: Vector3<f64> = Vector3::new(0.0, 0.0, -GRAVITY_MPS2);
+/// Extra clearance required of a ballistic step, m (ours).
+const FLIGHT_MARGIN_M: f64 = 0.05;
+
+impl<'a> Run<'a> {
+    fn new(terrain: &'a Terrain, rock: &'a RockBody, start: RigidState, params: &'a SimParams, rng: &'a mut Rng) -> Self {
+        let cr = terrain.materials.iter().map(|m| m.cr.sample(rng)).collect();
+        let settings = SolverSettings {
+            bounce_threshold_mps: params.bounce_threshold_mps,
+            stick_speed_mps: params.stick_speed_mps,
+            max_iterations: params.solver_iterations,
+        };
+        let out = Outcome {
+            final_state: start,
+            stop_reason: StopReason::MaxTime,
+            travel_time_s: 0.0,
+            max_kinetic_j: 0.0,
+            max_bounce_m: 0.0,
+            impacts: 0,
+            contact_steps: 0,
+            energy_guards: 0,
+        };
+        Run {
+            terrain,
+            rock,
+            params,
+            rng,
+            s: start,
+            t: 0.0,
+            cr,
+            touching: vec![false; rock.vertices_m.len()],
+            contacts: Vec::with_capacity(16),
+            last_sample: None,
+            out,
+            settings,
+        }
+    }
+
+    fn kinetic(&self, s: &RigidState) -> (f64, f64) {
+        let tr = s.translational_energy_j(self.rock.mass_kg);
+        (tr, tr + s.rotational_energy_j(&self.rock.inertia_kg_m2))
+    }
+
+    fn go(mut self, observer: &mut impl Observer) -> Outcome {
+        let p = self.params;
+        let mut rest_s = 0.0;
+        let mut flight_h = p.max_flight_step_s;
+        self.emit(observer, false, true);
+        let reason = loop {
+            if self.terrain.surface.at(self.s.position_m.x, self.s.position_m.y).is_none() {
+                break StopReason::LeftTerrain;
+            }
+            if self.t >= p.max_time_s {
+                break StopReason::MaxTime;
+            }
+            // Long exact ballistic step when clear of the ground.
+            let mut h = (2.0 * flight_h).min(p.max_flight_step_s).min(p.max_time_s - self.t);
+            let min_flight = 8.0 * p.dt_s;
+            while h >= min_flight && !self.flight_is_clear(h) {
+                h *= 0.5;
+            }
+            if h >= min_flight {
+                flight_h = h;
+                self.fly(h, observer);
+                rest_s = 0.0;
+                continue;
+            }
+            flight_h = min_flight;
+            let in_contact = self.contact_step(observer);
+            self.emit(observer, in_contact, false);
+            let v = self.s.velocity_mps.norm();
+            let w = self.s.omega_body_radps.norm();
+            if in_contact && v < p.stop_speed_mps && w < p.stop_spin_radps {
+                rest_s += p.dt_s;
+                if rest_s >= p.stop_duration_s - 1e-12 {
+                    break StopReason::Stopped;
+                }
+            } else {
+                rest_s = 0.0;
+            }
+        };
+        self.emit(observer, true, true);
+        self.out.final_state = self.s;
+        self.out.stop_reason = reason;
+        self.out.travel_time_s = self.t;
+        self.out
+    }
+
+    /// Whether the bounding sphere stays clear of the ground along the parabola over `h` seconds.
+    fn flight_is_clear(&self, h: f64) -> bool {
+        let x0 = self.s.position_m;
+        let x1 = x0 + self.s.velocity_mps * h + GRAVITY * (0.5 * h * h);
+        let r = self.rock.bounding_radius_m + FLIGHT_MARGIN_M;
+        let top = self.terrain.surface.max_height_in(x0.x.min(x1.x) - r, x0.x.max(x1.x) + r, x0.y.min(x1.y) - r, x0.y.max(x1.y) + r);
+        // z(t) is concave, so its minimum over the step is at an end.
+        x0.z.min(x1.z) - r > top
+    }
+
+    /// Exact ballistic motion over `h`, with free rotation, emitting samples along the parabola.
+    fn fly(&mut self, h: f64, observer: &mut impl Observer) {
+        let (x0, v0) = (self.s.position_m, self.s.velocity_mps);
+        let horizontal = (v0.x * v0.x + v0.y * v0.y).sqrt() * h;
+        let pieces = ((horizontal / self.params.sample_spacing_m).ceil() as usize).max((h / 0.1).ceil() as usize).max(1);
+        let mut t_done = 0.0;
+        for k in 1..=pieces {
+            let tk = h * k as f64 / pieces as f64;
+            let dt = tk - t_done;
+            t_done = tk;
+            // Rotation in sub-steps of at most 10 ms (ours): accurate phase for spins up to tens of rad/s.
+            let sub = (dt / 0.01).ceil().max(1.0) as usize;
+            for _ in 0..sub {
+                let (w1, half) = free_rotation_step(&self.s.omega_body_radps, &self.rock.inertia_kg_m2, dt / sub as f64);
+                self.s.orientation = rotate(&self.s.orientation, &half, dt / sub as f64);
+                self.s.omega_body_radps = w1;
+            }
+            self.s.position_m = x0 + v0 * tk + GRAVITY * (0.5 * tk * tk);
+            self.s.velocity_mps = v0 + GRAVITY * tk;
+            self.t += dt;
+            self.emit(observer, false, true);
+        }
+    }
+
+    /// One Moreau midpoint step near the ground. Returns whether there was a contact.
+    fn contact_step(&mut self, observer: &mut impl Observer) -> bool {
+        let h = self.params.dt_s;
+        let rock = self.rock;
+        let before = Velocities { linear_mps: self.s.velocity_mps, angular_body_radps: self.s.omega_body_radps };
+        let x_mid = self.s.position_m + self.s.velocity_mps * (0.5 * h);
+        let q_mid = rotate(&self.s.orientation, &self.s.omega_body_radps, 0.5 * h);
+        self.detect(&x_mid, &q_mid);
+        let (w_free, _) = free_rotation_step(&self.s.omega_body_radps, &rock.inertia_kg_m2, h);
+        let free = Velocities { linear_mps: self.s.velocity_mps + GRAVITY * h, angular_body_radps: w_free };
+        let mut after = free;
+        let in_contact = !self.contacts.is_empty();
+        if in_contact {
+            self.out.contact_steps += 1;
+            let (solved, report) = solve(rock, &q_mid, &self.contacts, &before, &free, &self.settings);
+            after = solved;
+            if report.energy_guard {
+                self.out.energy_guards += 1;
+            }
+            if let Some(c) = self.new_impact(&before, &q_mid) {
+                self.out.impacts += 1;
+                let v = before.linear_mps;
+                let speed = v.norm();
+                let angle = if speed > 0.0 { (-v.dot(&c.normal) / speed).clamp(-1.0, 1.0).asin().to_degrees() } else { 0.0 };
+                observer.impact(&super::Impact {
+                    t_s: self.t + 0.5 * h,
+                    point_m: c.point_m,
+                    normal: c.normal,
+                    triangle: c.triangle,
+                    approach_speed_mps: report.max_approach_mps,
+                    speed_mps: speed,
+                    impact_angle_deg: angle,
+                    cr: c.cr,
+                    kinetic_before_j: free.kinetic_energy_j(rock),
+                    kinetic_after_j: after.kinetic_energy_j(rock),
+                    energy_guard: report.energy_guard,
+                });
+            }
+        }
+        for t in self.touching.iter_mut() {
+            *t = false;
+        }
+        for c in &self.contacts {
+            self.touching[c.vertex] = true;
+        }
+        self.s.velocity_mps = after.linear_mps;
+        self.s.omega_body_radps = after.angular_body_radps;
+        self.s.position_m = x_mid + after.linear_mps * (0.5 * h);
+        self.s.orientation = rotate(&q_mid, &after.angular_body_radps, 0.5 * h);
+        // Project out penetration beyond the slop (position only; velocities are untouched).
+        let (mut push, mut deepest) = (Vector3::zeros(), 0.0f64);
+        for c in &self.contacts {
+            push += c.normal * c.depth_m;
+            deepest = deepest.max(c.depth_m);
+        }
+        if deepest > self.params.penetration_slop_m {
+            self.s.position_m += push.normalize() * (0.5 * (deepest - self.params.penetration_slop_m));
+        }
+        self.t += h;
+        in_contact
+    }
+
+    /// Fills `self.contacts` with the hull vertices below the ground at the pose (x, q).
+    fn detect(&mut self, x: &Vector3<f64>, q: &UnitQuaternion<f64>) {
+        self.contacts.clear();
+        let surface = &self.terrain.surface;
+        let r = self.rock.bounding_radius_m;
+        let top = surface.max_height_in(x.x - r, x.x + r, x.y - r, x.y + r);
+        if x.z - r > top {
+            return;
+        }
+        let rot = q.to_rotation_matrix();
+        for (i, b) in self.rock.vertices_m.iter().enumerate() {
+            let p = x + rot * b;
+            if p.z > top {
+                continue;
+            }
+            if let Some((depth, normal, triangle)) = surface.penetration(&p) {
+                let m = self.terrain.material_of(triangle);
+                self.contacts.push(Contact {
+                    vertex: i,
+                    point_m: p,
+                    normal,
+                    depth_m: depth,
+                    triangle,
+                    cr: self.cr[self.terrain.triangle_material[triangle as usize] as usize],
+                    mu_static: m.mu_static(),
+                    mu_dynamic: m.mu_dynamic(),
+                });
+            }
+        }
+    }
+
+    /// The fastest contact that was not touching in the previous step and approaches faster than the bounce
+    /// threshold, if any. With per-impact restitution, its material gets a new Cr draw (used from the next contact
+    /// on; this step uses the current one).
+    fn new_impact(&mut self, before: &Velocities, q: &UnitQuaternion<f64>) -> Option<Contact> {
+        let mut best: Option<(f64, Contact)> = None;
+        for c in &self.contacts {
+            if self.touching[c.vertex] {
+                continue;
+            }
+            let b = self.rock.vertices_m[c.vertex];
+            let u = before.linear_mps + q * before.angular_body_radps.cross(&b);
+            let approach = -u.dot(&c.normal);
+            if approach > self.params.bounce_threshold_mps && best.is_none_or(|(a, _)| approach > a) {
+                best = Some((approach, *c));
+            }
+        }
+        let (_, c) = best?;
+        if self.params.cr_draw == CrDraw::PerImpact {
+            let m = self.terrain.triangle_material[c.triangle as usize] as usize;
+            self.cr[m] = self.terrain.materials[m].cr.sample(self.rng);
+        }
+        Some(c)
+    }
+
+    /// Emits a sample if the rock moved `sample_spacing_m` horizontally (or 0.1 s passed) since the last one, or
+    /// if `force`.
+    fn emit(&mut self, observer: &mut impl Observer, in_contact: bool, force: bool) {
+        let (tr, total) = self.kinetic(&self.s);
+        self.out.max_kinetic_j = self.out.max_kinetic_j.max(total);
+        let x = self.s.position_m;
+        if !force {
+            if let Some((last, t_last)) = self.last_sample {
+                let d2 = (x.x - last.x).powi(2) + (x.y - last.y).powi(2);
+                if d2 < self.params.sample_spacing_m.powi(2) && self.t - t_last < 0.1 {
+                    return;
+                }
+            }
+        }
+        let rot = self.s.orientation.to_rotation_matrix();
+        let lowest = self.rock.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min);
+        let clearance = match self.terrain.surface.height(x.x, x.y) {
+            Some(z) => (x.z + lowest - z).max(0.0),
+            None => 0.0,
+        };
+        self.out.max_bounce_m = self.out.max_bounce_m.max(clearance);
+        self.last_sample = Some((x, self.t));
+        observer.sample(&Sample {
+            t_s: self.t,
+            position_m: x,
+            velocity_mps: self.s.velocity_mps,
+            spin_radps: self.s.omega_body_radps.norm(),
+            translational_j: tr,
+            kinetic_j: total,
+            clearance_m: clearance,
+            in_contact,
+        });
+    }
+}

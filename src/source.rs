@@ -1,0 +1,316 @@
+//! Release zones: where each rock starts, and its initial velocity and spin.
+//!
+//! Rocks are dealt to sources in blocks by their index (the first `count₀` rocks from source 0, and so on), and
+//! each rock draws its position from its own random stream, so a rock's release never depends on the others.
+
+use crate::error::{Error, Result};
+use crate::random::{uniform, uniform_in, Rng};
+use crate::rock::{random_orientation, RockBody};
+use crate::scenario::{SourceKind, SourceSpec};
+use crate::sim::RigidState;
+use crate::terrain::{horizontal_to_local, point_in_polygon};
+use crate::terrain::Terrain;
+use nalgebra::Vector3;
+
+#[derive(Debug, Clone)]
+enum Geometry {
+    Point([f64; 2]),
+    Polyline { pts: Vec<[f64; 2]>, cum: Vec<f64> },
+    Polygon { pts: Vec<[f64; 2]>, bbox: [f64; 4] },
+    Scatter { triangles: Vec<u32>, cum_area: Vec<f64> },
+}
+
+/// One release zone, ready to sample.
+#[derive(Debug, Clone)]
+pub struct Source {
+    /// Name for outputs.
+    pub name: String,
+    /// Rocks released from it.
+    pub count: usize,
+    /// The rock released here, when the source fixes it (campaign releases); otherwise drawn from `[rocks]`.
+    pub rock: Option<RockBody>,
+    /// The exact release (campaign releases): position in the local frame, velocity and spin (world frame).
+    pub release: Option<(Vector3<f64>, Vector3<f64>, Vector3<f64>)>,
+    geometry: Geometry,
+    spec: SourceSpec,
+}
+
+/// All release zones of a run.
+#[derive(Debug, Clone)]
+pub struct Sources {
+    /// The zones, in scenario order.
+    pub sources: Vec<Source>,
+}
+
+impl Sources {
+    /// Builds and checks the sources against the terrain. `total` (if given) rescales the counts to that many
+    /// rocks in all; `field` locates the sources in errors (e.g. `scenario.toml: sources`).
+    pub fn build(specs: &[SourceSpec], terrain: &Terrain, total: Option<usize>, field: &str) -> Result<Sources> {
+        let mut sources = Vec::with_capacity(specs.len());
+        for (i, spec) in specs.iter().enumerate() {
+            let f = format!("{field}[{i}]");
+            if spec.kind == SourceKind::Campaign {
+                let dir = spec.campaign.as_deref().ok_or_else(|| Error::invalid(format!("{f}.campaign"), "is missing", "give the campaign folder"))?;
+                let campaign = crate::campaign::Campaign::read(dir)?;
+                for r in &campaign.releases {
+                    let body = campaign.body(&campaign.blocks[&r.block_id])?;
+                    let p = terrain.up.to_internal(r.position_m) - terrain.origin;
+                    if terrain.surface.at(p.x, p.y).is_none() {
+                        return Err(Error::invalid(
+                            format!("{f}: run {}", r.trajectory_id),
+                            format!("release point {:?} is not over the terrain", r.position_m),
+                            "check that the campaign and the terrain share a frame",
+                        ));
+                    }
+                    let v = terrain.up.to_internal(r.velocity_mps);
+                    let w = terrain.up.to_internal(r.spin_radps);
+                    sources.push(Source {
+                        name: r.trajectory_id.clone(),
+                        count: spec.repeats.unwrap_or(1),
+                        rock: Some(body),
+                        release: Some((p, v, w)),
+                        geometry: Geometry::Point([p.x, p.y]),
+                        spec: spec.clone(),
+                    });
+                }
+                continue;
+            }
+            let to_local = |p: &[f64; 2]| horizontal_to_local(terrain.up, &terrain.origin, *p);
+            let pts: Vec<[f64; 2]> = spec.points.iter().map(to_local).collect();
+            let (geometry, area) = match spec.kind {
+                SourceKind::Point | SourceKind::Polyline => {
+                    for (k, p) in pts.iter().enumerate() {
+                        if terrain.surface.at(p[0], p[1]).is_none() {
+                            return Err(Error::invalid(
+                                format!("{f}.points[{k}]"),
+                                format!("{:?} is not over the terrain", spec.points[k]),
+                                "give coordinates in the terrain's frame, inside its extent (see summary.json of a run, or the terrain's README)",
+                            ));
+                        }
+                    }
+                    if spec.kind == SourceKind::Point {
+                        (Geometry::Point(pts[0]), 0.0)
+                    } else {
+                        let mut cum = vec![0.0];
+                        for w in pts.windows(2) {
+                            cum.push(cum.last().copied().unwrap_or(0.0) + ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt());
+                        }
+                        (Geometry::Polyline { pts, cum }, 0.0)
+                    }
+                }
+                SourceKind::Polygon => {
+                    let bbox = pts.iter().fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, p| {
+                        [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
+                    });
+                    // Area over the terrain, by a fixed 64 × 64 lattice over the bounding box.
+                    let mut covered = 0usize;
+                    for a in 0..64 {
+                        for b in 0..64 {
+                            let x = bbox[0] + (a as f64 + 0.5) / 64.0 * (bbox[2] - bbox[0]);
+                            let y = bbox[1] + (b as f64 + 0.5) / 64.0 * (bbox[3] - bbox[1]);
+                            if point_in_polygon(x, y, &pts) && terrain.surface.at(x, y).is_some() {
+                                covered += 1;
+                            }
+                        }
+                    }
+                    if covered == 0 {
+                        return Err(Error::invalid(
+                            format!("{f}.points"),
+                            "the polygon does not overlap the terrain",
+                            "give coordinates in the terrain's frame, inside its extent",
+                        ));
+                    }
+                    let area = (bbox[2] - bbox[0]) * (bbox[3] - bbox[1]) * covered as f64 / 4096.0;
+                    (Geometry::Polygon { pts, bbox }, area)
+                }
+                SourceKind::Scatter => {
+                    let within: Vec<[f64; 2]> = spec.within.iter().map(to_local).collect();
+                    let mat = spec.material.as_ref().and_then(|m| terrain.material_index(m));
+                    let mut triangles = Vec::new();
+                    let mut cum_area = Vec::new();
+                    let mut total_area = 0.0;
+                    for t in 0..terrain.triangle_material.len() as u32 {
+                        if let Some(m) = mat {
+                            if terrain.triangle_material[t as usize] as usize != m {
+                                continue;
+                            }
+                        }
+                        let slope = terrain.surface.slope_deg(t);
+                        if spec.min_slope_deg.is_some_and(|s| slope < s) || spec.max_slope_deg.is_some_and(|s| slope > s) || slope >= 89.999 {
+                            continue;
+                        }
+                        let [a, b, c] = terrain.surface.corners(t);
+                        if !within.is_empty() {
+                            let centre = (a + b + c) / 3.0;
+                            if !point_in_polygon(centre.x, centre.y, &within) {
+                                continue;
+                            }
+                        }
+                        total_area += 0.5 * (b - a).cross(&(c - a)).norm();
+                        triangles.push(t);
+                        cum_area.push(total_area);
+                    }
+                    if triangles.is_empty() {
+                        return Err(Error::invalid(
+                            f.clone(),
+                            "no terrain triangle matches the scatter selection (material, slope range, polygon)",
+                            "widen the slope range, check the material name, or check that `within` overlaps the terrain",
+                        ));
+                    }
+                    (Geometry::Scatter { triangles, cum_area }, total_area)
+                }
+            };
+            let count = match (spec.count, spec.density_per_m2) {
+                (Some(c), _) => c,
+                (None, Some(d)) => (d * area).round().max(1.0) as usize,
+                (None, None) => 0,
+            };
+            sources.push(Source {
+                name: spec.name.clone().unwrap_or_else(|| format!("source_{i}")),
+                count,
+                rock: None,
+                release: None,
+                geometry,
+                spec: spec.clone(),
+            });
+        }
+        if let Some(n) = total {
+            rescale(&mut sources, n);
+        }
+        if sources.iter().map(|s| s.count).sum::<usize>() == 0 {
+            return Err(Error::invalid(field, "the sources release no rock", "give count = N on a source, or --rocks N"));
+        }
+        Ok(Sources { sources })
+    }
+
+    /// Total rocks.
+    pub fn total(&self) -> usize {
+        self.sources.iter().map(|s| s.count).sum()
+    }
+
+    /// The source rock `index` comes from.
+    pub fn source_of(&self, index: usize) -> usize {
+        let mut acc = 0;
+        for (i, s) in self.sources.iter().enumerate() {
+            acc += s.count;
+            if index < acc {
+                return i;
+            }
+        }
+        self.sources.len() - 1
+    }
+
+    /// Draws the release state of `rock` from source `s`.
+    pub fn release(&self, s: usize, terrain: &Terrain, rock: &RockBody, rng: &mut Rng) -> RigidState {
+        let src = &self.sources[s];
+        if let Some((p, v, w)) = src.release {
+            // A measured release: the centre of mass where it was, lifted only if the random orientation buries a
+            // vertex.
+            let orientation = random_orientation(rng);
+            let mut state = RigidState { position_m: p, velocity_mps: v, orientation, omega_body_radps: orientation.inverse_transform_vector(&w) };
+            let mut lifted = state;
+            place_above_ground(terrain, rock, &mut lifted, 0.0);
+            state.position_m.z = state.position_m.z.max(lifted.position_m.z);
+            return state;
+        }
+        let [x, y] = src.sample_xy(terrain, rng);
+        let orientation = random_orientation(rng);
+        let ground = terrain.surface.at(x, y);
+        let z0 = ground.map(|g| g.z_m).unwrap_or(0.0);
+        let mut state = RigidState { position_m: Vector3::new(x, y, z0), velocity_mps: Vector3::zeros(), orientation, omega_body_radps: Vector3::zeros() };
+        place_above_ground(terrain, rock, &mut state, src.spec.height_m);
+        if let Some(v) = src.spec.velocity_mps {
+            state.velocity_mps = Vector3::new(v[0], v[1], v[2]);
+        } else if let Some([lo, hi]) = src.spec.speed_mps {
+            let n = ground.map(|g| g.normal).unwrap_or(Vector3::z());
+            state.velocity_mps = downslope(&n) * uniform_in(rng, lo, hi);
+        }
+        if let Some([lo, hi]) = src.spec.spin_radps {
+            let axis = random_orientation(rng) * Vector3::z();
+            state.omega_body_radps = orientation.inverse_transform_vector(&axis) * uniform_in(rng, lo, hi);
+        }
+        state
+    }
+}
+
+impl Source {
+    fn sample_xy(&self, terrain: &Terrain, rng: &mut Rng) -> [f64; 2] {
+        match &self.geometry {
+            Geometry::Point(p) => *p,
+            Geometry::Polyline { pts, cum } => {
+                let total = *cum.last().unwrap_or(&0.0);
+                let d = uniform(rng) * total;
+                let k = cum.partition_point(|&c| c <= d).clamp(1, pts.len() - 1);
+                let seg = cum[k] - cum[k - 1];
+                let f = if seg > 0.0 { (d - cum[k - 1]) / seg } else { 0.0 };
+                [pts[k - 1][0] + f * (pts[k][0] - pts[k - 1][0]), pts[k - 1][1] + f * (pts[k][1] - pts[k - 1][1])]
+            }
+            Geometry::Polygon { pts, bbox } => {
+                // Rejection sampling; the polygon is known to overlap the terrain, so this ends.
+                let mut last = [bbox[0], bbox[1]];
+                for _ in 0..100_000 {
+                    let p = [uniform_in(rng, bbox[0], bbox[2]), uniform_in(rng, bbox[1], bbox[3])];
+                    last = p;
+                    if point_in_polygon(p[0], p[1], pts) && terrain.surface.at(p[0], p[1]).is_some() {
+                        return p;
+                    }
+                }
+                last
+            }
+            Geometry::Scatter { triangles, cum_area } => {
+                let total = *cum_area.last().unwrap_or(&0.0);
+                let a = uniform(rng) * total;
+                let k = cum_area.partition_point(|&c| c <= a).min(triangles.len() - 1);
+                let [p, q, r] = terrain.surface.corners(triangles[k]);
+                let (mut u, mut v) = (uniform(rng), uniform(rng));
+                if u + v > 1.0 {
+                    (u, v) = (1.0 - u, 1.0 - v);
+                }
+                let pt = p + (q - p) * u + (r - p) * v;
+                [pt.x, pt.y]
+            }
+        }
+    }
+}
+
+/// Largest-remainder rescaling of source counts to `n` rocks in all (proportional to the counts as given).
+fn rescale(sources: &mut [Source], n: usize) {
+    let given: usize = sources.iter().map(|s| s.count).sum();
+    let weights: Vec<f64> = if given == 0 { vec![1.0; sources.len()] } else { sources.iter().map(|s| s.count as f64).collect() };
+    let wsum: f64 = weights.iter().sum();
+    let exact: Vec<f64> = weights.iter().map(|w| w / wsum * n as f64).collect();
+    let mut counts: Vec<usize> = exact.iter().map(|e| e.floor() as usize).collect();
+    let mut rest = n - counts.iter().sum::<usize>();
+    let mut order: Vec<usize> = (0..sources.len()).collect();
+    order.sort_by(|&a, &b| (exact[b] - exact[b].floor()).total_cmp(&(exact[a] - exact[a].floor())).then(a.cmp(&b)));
+    for &i in order.iter().cycle() {
+        if rest == 0 {
+            break;
+        }
+        counts[i] += 1;
+        rest -= 1;
+    }
+    for (s, c) in sources.iter_mut().zip(counts) {
+        s.count = c;
+    }
+}
+
+/// The unit vector down the steepest slope of a plane with upward normal `n` (along the plane); +x on flat ground.
+pub fn downslope(n: &Vector3<f64>) -> Vector3<f64> {
+    let d = Vector3::new(n.x * n.z, n.y * n.z, -(n.x * n.x + n.y * n.y));
+    d.try_normalize(1e-12).unwrap_or(Vector3::x())
+}
+
+/// Lifts a rock so that its lowest vertex is `gap_m` above the ground under it (vertically), checking every
+/// vertex against the ground under that vertex.
+pub fn place_above_ground(terrain: &Terrain, rock: &RockBody, state: &mut RigidState, gap_m: f64) {
+    let rot = state.orientation.to_rotation_matrix();
+    let mut lift = f64::NEG_INFINITY;
+    let c = state.position_m;
+    for b in &rock.vertices_m {
+        let p = rot * b;
+        let ground = terrain.surface.height(c.x + p.x, c.y + p.y).or_else(|| terrain.surface.height(c.x, c.y)).unwrap_or(c.z);
+        lift = lift.max(ground + gap_m - p.z);
+    }
+    state.position_m.z = lift;
+}

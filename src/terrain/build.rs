@@ -1,0 +1,198 @@
+//! Building a [`Terrain`] from the scenario's files: read, put z up, shift to a local origin, merge, and give each
+//! triangle its material.
+
+use super::{point_in_polygon, horizontal_to_local, Material, Terrain};
+use crate::error::{Error, Result};
+use crate::io::MeshData;
+use crate::raster::{Crs, Grid};
+use crate::scenario::{MaterialsBy, TerrainSpec};
+use nalgebra::Vector3;
+use std::path::{Path, PathBuf};
+
+/// Reads one terrain file by its extension: `.obj`, `.stl`, `.tif`/`.tiff` (GeoTIFF DEM) or `.asc` (ESRI ASCII
+/// DEM). DEMs are triangulated; their CRS is returned too.
+pub fn read_terrain_file(path: &Path) -> Result<(MeshData, Crs)> {
+    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    match ext.as_str() {
+        "obj" => Ok((crate::io::obj::read_obj(path)?, Crs::default())),
+        "stl" => Ok((crate::io::stl::read_stl(path)?, Crs::default())),
+        "tif" | "tiff" | "asc" => {
+            let grid = if ext == "asc" { crate::io::ascii_grid::read_grid(path)? } else { crate::io::geotiff::read_grid(path)? };
+            let mesh = grid_to_mesh(&grid, &stem);
+            if mesh.triangles.is_empty() {
+                return Err(Error::format(
+                    path.display().to_string(),
+                    format!("the DEM has {} valid cells of {}: no 3 neighbouring cells hold data", grid.count_valid(), grid.values.len()),
+                    "check the nodata value and that the grid holds elevations",
+                ));
+            }
+            Ok((mesh, grid.crs.clone()))
+        }
+        _ => Err(Error::format(
+            path.display().to_string(),
+            format!("unknown terrain file type '.{ext}'"),
+            "use .obj, .stl, .tif/.tiff (GeoTIFF DEM) or .asc (ESRI ASCII grid)",
+        )),
+    }
+}
+
+/// Triangulates a DEM: nodes at cell centres, two triangles per square of four valid nodes (one when only three are
+/// valid), so nodata holes stay holes. Split along the diagonal that keeps the surface closest to the four
+/// corners' mean (ours; either diagonal is exact at the nodes).
+pub fn grid_to_mesh(grid: &Grid, name: &str) -> MeshData {
+    let (nc, nr) = (grid.ncols, grid.nrows);
+    let mut index = vec![u32::MAX; nc * nr];
+    let mut vertices = Vec::new();
+    for r in 0..nr {
+        for c in 0..nc {
+            if let Some(z) = grid.get(c, r) {
+                let (x, y) = grid.cell_centre(c, r);
+                index[r * nc + c] = vertices.len() as u32;
+                vertices.push([x, y, z as f64]);
+            }
+        }
+    }
+    let mut triangles = Vec::new();
+    for r in 0..nr.saturating_sub(1) {
+        for c in 0..nc.saturating_sub(1) {
+            // Corners counter-clockwise seen from above: rows grow southward.
+            let sw = index[(r + 1) * nc + c];
+            let se = index[(r + 1) * nc + c + 1];
+            let ne = index[r * nc + c + 1];
+            let nw = index[r * nc + c];
+            let valid = [sw, se, ne, nw].iter().filter(|&&v| v != u32::MAX).count();
+            if valid == 4 {
+                let z = |k: u32| vertices[k as usize][2];
+                if (z(sw) - z(ne)).abs() <= (z(se) - z(nw)).abs() {
+                    triangles.push([sw, se, ne]);
+                    triangles.push([sw, ne, nw]);
+                } else {
+                    triangles.push([sw, se, nw]);
+                    triangles.push([se, ne, nw]);
+                }
+            } else if valid == 3 {
+                let t: Vec<u32> = [sw, se, ne, nw].into_iter().filter(|&v| v != u32::MAX).collect();
+                triangles.push([t[0], t[1], t[2]]);
+            }
+        }
+    }
+    let n = triangles.len();
+    MeshData {
+        vertices,
+        triangles,
+        group: vec![0; n],
+        group_names: vec![name.to_string()],
+        material: vec![0; n],
+        material_names: vec![String::new()],
+    }
+}
+
+/// Builds the terrain of a scenario: `files` (absolute) as described by `spec`, with `materials` (in the order
+/// the scenario defines them).
+pub fn build_terrain(files: &[PathBuf], spec: &TerrainSpec, materials: &[Material], scenario: &Path) -> Result<Terrain> {
+    let mut meshes = Vec::new();
+    let mut crs = Crs::default();
+    for p in files {
+        let (mesh, c) = read_terrain_file(p)?;
+        if crs.is_unknown() {
+            crs = c;
+        }
+        meshes.push((p, mesh));
+    }
+    if let Some(code) = spec.crs_epsg {
+        crs = Crs { epsg: Some(code), geokeys: None, wkt: crs.wkt };
+    }
+    let up = spec.up;
+    // Local origin: the lower corner of the first file, to the metre, in z-up axes (z origin kept at 0 so that
+    // local heights read as elevations).
+    let first = &meshes[0].1;
+    let (mut ox, mut oy) = (f64::INFINITY, f64::INFINITY);
+    for v in &first.vertices {
+        let p = up.to_internal(*v);
+        ox = ox.min(p.x);
+        oy = oy.min(p.y);
+    }
+    let origin = Vector3::new(ox.floor(), oy.floor(), 0.0);
+    let mut vertices = Vec::new();
+    let mut triangles = Vec::new();
+    let mut names = Vec::new();
+    for (path, mesh) in &meshes {
+        let base = vertices.len() as u32;
+        for (i, v) in mesh.vertices.iter().enumerate() {
+            if !v.iter().all(|c| c.is_finite()) {
+                return Err(Error::format(path.display().to_string(), format!("vertex {} has a non-finite coordinate", i + 1), "fix or remove that vertex"));
+            }
+            vertices.push(up.to_internal(*v) - origin);
+        }
+        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        for (t, tri) in mesh.triangles.iter().enumerate() {
+            triangles.push(tri.map(|k| k + base));
+            names.push(match spec.materials_by {
+                MaterialsBy::Group => mesh.group_names[mesh.group[t] as usize].clone(),
+                MaterialsBy::Material => mesh.material_names[mesh.material[t] as usize].clone(),
+                MaterialsBy::File => stem.clone(),
+                MaterialsBy::Slope | MaterialsBy::Single => String::new(),
+            });
+        }
+    }
+    if triangles.is_empty() {
+        return Err(Error::invalid(format!("{}: terrain.files", scenario.display()), "the terrain files hold no triangles", "check the files"));
+    }
+    let index_of = |name: &str| materials.iter().position(|m| m.name == name);
+    let single = if materials.len() == 1 { 0 } else { index_of("default").unwrap_or(0) };
+    let mut tri_mat = Vec::with_capacity(triangles.len());
+    let mut unknown: Vec<String> = Vec::new();
+    for (t, name) in triangles.iter().zip(&names) {
+        let m = match spec.materials_by {
+            MaterialsBy::Single => single,
+            MaterialsBy::Slope => {
+                let [a, b, c] = t.map(|k| vertices[k as usize]);
+                let n: Vector3<f64> = (b - a).cross(&(c - a));
+                let slope = (n.z.abs() / n.norm().max(1e-300)).clamp(0.0, 1.0).acos().to_degrees();
+                index_of(if slope > spec.slope_face_deg { "face" } else { "floor" }).unwrap_or(0)
+            }
+            _ => {
+                let target = spec.material_names.get(name).map(String::as_str).unwrap_or(name);
+                match index_of(target) {
+                    Some(i) => i,
+                    None => {
+                        if !unknown.contains(name) {
+                            unknown.push(name.clone());
+                        }
+                        0
+                    }
+                }
+            }
+        };
+        tri_mat.push(m as u16);
+    }
+    if !unknown.is_empty() {
+        let by = format!("{:?}", spec.materials_by).to_lowercase();
+        return Err(Error::invalid(
+            format!("{}: terrain.materials_by", scenario.display()),
+            format!("the terrain has {by} names with no material: {}", unknown.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ")),
+            format!(
+                "define [materials.NAME] for each, or map them with [terrain.material_names] (defined: {})",
+                materials.iter().map(|m| m.name.as_str()).collect::<Vec<_>>().join(", ")
+            ),
+        ));
+    }
+    for zone in &spec.zones {
+        let m = index_of(&zone.material).unwrap_or(0) as u16;
+        let poly: Vec<[f64; 2]> = zone.polygon.iter().map(|p| horizontal_to_local(up, &origin, *p)).collect();
+        for (t, tri) in triangles.iter().enumerate() {
+            let c = tri.iter().fold(Vector3::zeros(), |acc, &k| acc + vertices[k as usize]) / 3.0;
+            if point_in_polygon(c.x, c.y, &poly) {
+                tri_mat[t] = m;
+            }
+        }
+    }
+    let mut terrain = Terrain::from_local(vertices, &triangles, &tri_mat, materials.to_vec())
+        .map_err(|_| Error::invalid(format!("{}: terrain.files", scenario.display()), "every triangle is degenerate or vertical", "check the files and the `up` axis"))?;
+    terrain.origin = origin;
+    terrain.up = up;
+    terrain.crs = crs;
+    Ok(terrain)
+}
+

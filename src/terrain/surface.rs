@@ -1,0 +1,496 @@
+//! The terrain surface as rocks see it: a 2.5D triangulated surface z(x, y) with a uniform grid index.
+//!
+//! Rock contact needs one question answered fast and exactly: how high is the ground under this (x, y), and which
+//! way does it face? Every triangle is binned by its horizontal bounding box into a uniform grid; a query tests the
+//! few triangles of one bin. Where several triangles lie over one point (an overhang), the highest is the surface:
+//! talus treats terrain as 2.5D, like DEM-based codes (RAMMS, Rockyfor3D). A pyramid of per-bin maximum heights
+//! bounds the ground under a whole rectangle, which lets free-flying rocks take long exact steps.
+//!
+//! # Units
+//! Metres, in the terrain's local frame (origin subtracted, z up).
+
+use nalgebra::Vector3;
+
+/// Where a vertical line meets the surface.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SurfacePoint {
+    /// Surface height, m.
+    pub z_m: f64,
+    /// Upward unit normal of the triangle.
+    pub normal: Vector3<f64>,
+    /// Triangle index.
+    pub triangle: u32,
+}
+
+/// Per-triangle data for point location and height: barycentric inverse and plane z = a·x + b·y + c. Vertical
+/// triangles have no footprint (`vertical` is set and the rest is unused): they take part in contact only.
+#[derive(Debug, Clone, Copy)]
+struct TriPlane {
+    vertical: bool,
+    x0: f64,
+    y0: f64,
+    inv: [f64; 4],
+    a: f64,
+    b: f64,
+    c: f64,
+}
+
+/// A 2.5D triangulated surface with a grid index. Build it with [`Surface::new`].
+#[derive(Debug, Clone)]
+pub struct Surface {
+    vertices: Vec<Vector3<f64>>,
+    triangles: Vec<[u32; 3]>,
+    planes: Vec<TriPlane>,
+    x0: f64,
+    y0: f64,
+    bin_m: f64,
+    nx: usize,
+    ny: usize,
+    /// CSR: triangles of bin k are `items[offsets[k]..offsets[k + 1]]`.
+    offsets: Vec<u32>,
+    items: Vec<u32>,
+    /// Max-height pyramid; level 0 has nx × ny bins, each next level halves both sizes (rounded up).
+    zmax: Vec<(usize, usize, Vec<f64>)>,
+    z_min_m: f64,
+    z_max_m: f64,
+}
+
+/// Counts of what [`Surface::new`] kept and dropped.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SurfaceStats {
+    /// Triangles used.
+    pub triangles: usize,
+    /// Triangles dropped because they have (almost) no area or repeat a vertex.
+    pub degenerate_dropped: usize,
+    /// Vertical triangles (no horizontal footprint): they give no height but still stop rocks that hit them.
+    pub vertical: usize,
+}
+
+impl Surface {
+    /// Builds the surface from local-frame vertices and triangles (any winding). Returns the surface, the
+    /// original indices of the triangles kept (so callers can carry per-triangle data) and what was dropped.
+    /// Returns `None` if no triangle is usable.
+    pub fn new(vertices: Vec<Vector3<f64>>, triangles: &[[u32; 3]]) -> Option<(Surface, Vec<usize>, SurfaceStats)> {
+        let mut stats = SurfaceStats::default();
+        let mut kept = Vec::with_capacity(triangles.len());
+        let mut tris = Vec::with_capacity(triangles.len());
+        let mut planes = Vec::with_capacity(triangles.len());
+        for (i, t) in triangles.iter().enumerate() {
+            let [ia, ib, ic] = t.map(|k| k as usize);
+            if ia == ib || ib == ic || ia == ic || ia.max(ib).max(ic) >= vertices.len() {
+                stats.degenerate_dropped += 1;
+                continue;
+            }
+            let (a, b, c) = (vertices[ia], vertices[ib], vertices[ic]);
+            let n = (b - a).cross(&(c - a));
+            let scale = (b - a).norm_squared().max((c - a).norm_squared()).max((c - b).norm_squared());
+            if !(n.norm() > 1e-10 * scale) || !n.iter().all(|v| v.is_finite()) {
+                stats.degenerate_dropped += 1;
+                continue;
+            }
+            // Horizontal footprint: 2 × signed area in xy.
+            let det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+            if det.abs() <= 1e-9 * scale {
+                stats.vertical += 1;
+                planes.push(TriPlane { vertical: true, x0: a.x, y0: a.y, inv: [0.0; 4], a: 0.0, b: 0.0, c: 0.0 });
+                tris.push(*t);
+                kept.push(i);
+                continue;
+            }
+            let inv = [(c.y - a.y) / det, -(c.x - a.x) / det, -(b.y - a.y) / det, (b.x - a.x) / det];
+            // z = a.z + u (b.z − a.z) + v (c.z − a.z), (u, v) = inv · (p − a)
+            let (dz1, dz2) = (b.z - a.z, c.z - a.z);
+            let pa = dz1 * inv[0] + dz2 * inv[2];
+            let pb = dz1 * inv[1] + dz2 * inv[3];
+            let pc = a.z - pa * a.x - pb * a.y;
+            planes.push(TriPlane { vertical: false, x0: a.x, y0: a.y, inv, a: pa, b: pb, c: pc });
+            tris.push(*t);
+            kept.push(i);
+        }
+        stats.triangles = tris.len();
+        if stats.triangles == stats.vertical {
+            return None;
+        }
+        let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+        let mut area = 0.0;
+        for t in &tris {
+            for &k in t {
+                lo = lo.inf(&vertices[k as usize]);
+                hi = hi.sup(&vertices[k as usize]);
+            }
+            let (a, b, c) = (vertices[t[0] as usize], vertices[t[1] as usize], vertices[t[2] as usize]);
+            area += 0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)).abs();
+        }
+        // About one to two triangles per bin.
+        let bin_m = (1.5 * area / (stats.triangles - stats.vertical) as f64).sqrt().max(1e-3);
+        let nx = (((hi.x - lo.x) / bin_m).floor() as usize + 1).min(1 << 15);
+        let ny = (((hi.y - lo.y) / bin_m).floor() as usize + 1).min(1 << 15);
+        let bin_m = bin_m.max((hi.x - lo.x) / nx as f64).max((hi.y - lo.y) / ny as f64) * (1.0 + 1e-9);
+        let mut surface = Surface {
+            vertices,
+            triangles: tris,
+            planes,
+            x0: lo.x,
+            y0: lo.y,
+            bin_m,
+            nx,
+            ny,
+            offsets: Vec::new(),
+            items: Vec::new(),
+            zmax: Vec::new(),
+            z_min_m: lo.z,
+            z_max_m: hi.z,
+        };
+        surface.build_index();
+        Some((surface, kept, stats))
+    }
+
+    fn bin_range(&self, lo: f64, hi: f64, origin: f64, n: usize) -> (usize, usize) {
+        let a = ((lo - origin) / self.bin_m).floor().max(0.0) as usize;
+        let b = ((hi - origin) / self.bin_m).floor().max(0.0) as usize;
+        (a.min(n - 1), b.min(n - 1))
+    }
+
+    fn build_index(&mut self) {
+        let (nx, ny) = (self.nx, self.ny);
+        let mut counts = vec![0u32; nx * ny + 1];
+        let ranges: Vec<(usize, usize, usize, usize)> = self
+            .triangles
+            .iter()
+            .map(|t| {
+                let p = t.map(|k| self.vertices[k as usize]);
+                let (x_lo, x_hi) = (p[0].x.min(p[1].x).min(p[2].x), p[0].x.max(p[1].x).max(p[2].x));
+                let (y_lo, y_hi) = (p[0].y.min(p[1].y).min(p[2].y), p[0].y.max(p[1].y).max(p[2].y));
+                let (i0, i1) = self.bin_range(x_lo, x_hi, self.x0, nx);
+                let (j0, j1) = self.bin_range(y_lo, y_hi, self.y0, ny);
+                (i0, i1, j0, j1)
+            })
+            .collect();
+        for &(i0, i1, j0, j1) in &ranges {
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    counts[j * nx + i + 1] += 1;
+                }
+            }
+        }
+        for k in 1..counts.len() {
+            counts[k] += counts[k - 1];
+        }
+        let mut fill = counts.clone();
+        let mut items = vec![0u32; counts[nx * ny] as usize];
+        let mut zmax = vec![f64::NEG_INFINITY; nx * ny];
+        for (t, &(i0, i1, j0, j1)) in ranges.iter().enumerate() {
+            let tz = self.triangles[t].iter().map(|&k| self.vertices[k as usize].z).fold(f64::NEG_INFINITY, f64::max);
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let k = j * nx + i;
+                    items[fill[k] as usize] = t as u32;
+                    fill[k] += 1;
+                    zmax[k] = zmax[k].max(tz);
+                }
+            }
+        }
+        self.offsets = counts;
+        self.items = items;
+        let mut levels = vec![(nx, ny, zmax)];
+        while levels.last().map(|(w, h, _)| *w > 1 || *h > 1).unwrap_or(false) {
+            let (w, h, prev) = levels.last().expect("non-empty");
+            let (w2, h2) = (w.div_ceil(2), h.div_ceil(2));
+            let mut next = vec![f64::NEG_INFINITY; w2 * h2];
+            for j in 0..*h {
+                for i in 0..*w {
+                    let k = (j / 2) * w2 + i / 2;
+                    next[k] = next[k].max(prev[j * w + i]);
+                }
+            }
+            levels.push((w2, h2, next));
+        }
+        self.zmax = levels;
+    }
+
+    /// The surface under (x, y): the highest triangle whose footprint holds the point. `None` over holes and
+    /// outside the surface.
+    #[inline]
+    pub fn at(&self, x: f64, y: f64) -> Option<SurfacePoint> {
+        let fi = (x - self.x0) / self.bin_m;
+        let fj = (y - self.y0) / self.bin_m;
+        if !(fi >= 0.0 && fj >= 0.0) {
+            return None;
+        }
+        let (i, j) = (fi as usize, fj as usize);
+        if i >= self.nx || j >= self.ny {
+            return None;
+        }
+        let k = j * self.nx + i;
+        let mut best: Option<(f64, u32)> = None;
+        for &t in &self.items[self.offsets[k] as usize..self.offsets[k + 1] as usize] {
+            let p = &self.planes[t as usize];
+            if p.vertical {
+                continue;
+            }
+            let (dx, dy) = (x - p.x0, y - p.y0);
+            let u = p.inv[0] * dx + p.inv[1] * dy;
+            let v = p.inv[2] * dx + p.inv[3] * dy;
+            const EPS: f64 = 1e-9;
+            if u >= -EPS && v >= -EPS && u + v <= 1.0 + EPS {
+                let z = p.a * x + p.b * y + p.c;
+                if best.is_none_or(|(bz, _)| z > bz) {
+                    best = Some((z, t));
+                }
+            }
+        }
+        best.map(|(z, t)| SurfacePoint { z_m: z, normal: self.normal(t), triangle: t })
+    }
+
+    /// Height of the surface under (x, y), `None` over holes.
+    #[inline]
+    pub fn height(&self, x: f64, y: f64) -> Option<f64> {
+        self.at(x, y).map(|p| p.z_m)
+    }
+
+    /// Unit normal of triangle `t`, pointing up (out of the ground); for a vertical triangle, horizontal, on the
+    /// side its winding gives.
+    #[inline]
+    pub fn normal(&self, t: u32) -> Vector3<f64> {
+        let p = &self.planes[t as usize];
+        if p.vertical {
+            let [a, b, c] = self.corners(t);
+            return (b - a).cross(&(c - a)).normalize();
+        }
+        Vector3::new(-p.a, -p.b, 1.0).normalize()
+    }
+
+    /// For a point below the surface: its depth (distance to the nearest point of the surface) and the direction
+    /// out of the ground toward that point, with the triangle it lies on. `None` if the point is not below the
+    /// surface. The nearest point lies within the vertical depth, so only triangles binned within that horizontal
+    /// distance are examined; this finds the side of a thin wall a fast rock has just entered, where the vertical
+    /// direction would push the rock over the wall.
+    pub fn penetration(&self, p: &Vector3<f64>) -> Option<(f64, Vector3<f64>, u32)> {
+        let top = self.at(p.x, p.y)?;
+        let vertical_depth = top.z_m - p.z;
+        if vertical_depth <= 0.0 {
+            return None;
+        }
+        let plane_depth = vertical_depth * top.normal.z;
+        let r = vertical_depth;
+        let (i0, i1) = self.bin_range(p.x - r, p.x + r, self.x0, self.nx);
+        let (j0, j1) = self.bin_range(p.y - r, p.y + r, self.y0, self.ny);
+        let mut best = (plane_depth * plane_depth, top.triangle, None::<Vector3<f64>>);
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let k = j * self.nx + i;
+                for &t in &self.items[self.offsets[k] as usize..self.offsets[k + 1] as usize] {
+                    if t == top.triangle {
+                        continue;
+                    }
+                    let [a, b, c] = self.corners(t);
+                    let q = closest_point_on_triangle(p, &a, &b, &c);
+                    let d2 = (q - p).norm_squared();
+                    if d2 < best.0 {
+                        best = (d2, t, Some(q));
+                    }
+                }
+            }
+        }
+        let (d2, t, q) = best;
+        let depth = d2.sqrt();
+        let normal = match q {
+            // Pointing from the buried point to the surface: out of the ground. Oriented along the face normal when
+            // the nearest point is inside a face.
+            Some(q) if depth > 1e-12 => (q - p) / depth,
+            _ => top.normal,
+        };
+        Some((depth, normal, t))
+    }
+
+    /// An upper bound of the surface height over the rectangle [x_lo, x_hi] × [y_lo, y_hi] (`NEG_INFINITY` where
+    /// there is no surface at all). Conservative: it may overestimate, never underestimate.
+    pub fn max_height_in(&self, x_lo: f64, x_hi: f64, y_lo: f64, y_hi: f64) -> f64 {
+        let span = ((x_hi - x_lo).max(y_hi - y_lo) / self.bin_m).max(1.0);
+        let mut level = (span.log2().ceil() as usize).min(self.zmax.len() - 1);
+        loop {
+            let (w, h, z) = &self.zmax[level];
+            let size = self.bin_m * (1u64 << level) as f64;
+            let to_i = |v: f64, origin: f64, n: usize| (((v - origin) / size).floor().max(0.0) as usize).min(n - 1);
+            let (i0, i1) = (to_i(x_lo, self.x0, *w), to_i(x_hi, self.x0, *w));
+            let (j0, j1) = (to_i(y_lo, self.y0, *h), to_i(y_hi, self.y0, *h));
+            if (i1 - i0 + 1) * (j1 - j0 + 1) <= 16 || level + 1 == self.zmax.len() {
+                let mut m = f64::NEG_INFINITY;
+                for j in j0..=j1 {
+                    for i in i0..=i1 {
+                        m = m.max(z[j * w + i]);
+                    }
+                }
+                return m;
+            }
+            level += 1;
+        }
+    }
+
+    /// Horizontal bounds (x_min, y_min, x_max, y_max) of the surface, m.
+    pub fn bounds_xy(&self) -> (f64, f64, f64, f64) {
+        (self.x0, self.y0, self.x0 + self.nx as f64 * self.bin_m, self.y0 + self.ny as f64 * self.bin_m)
+    }
+
+    /// Lowest and highest vertex heights, m.
+    pub fn z_range_m(&self) -> (f64, f64) {
+        (self.z_min_m, self.z_max_m)
+    }
+
+    /// The vertices (local frame).
+    pub fn vertices(&self) -> &[Vector3<f64>] {
+        &self.vertices
+    }
+
+    /// The triangles kept.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// Slope of triangle `t` from horizontal, degrees.
+    pub fn slope_deg(&self, t: u32) -> f64 {
+        self.normal(t).z.clamp(-1.0, 1.0).acos().to_degrees()
+    }
+
+    /// Horizontal (projected) area of triangle `t`, m².
+    pub fn footprint_area_m2(&self, t: u32) -> f64 {
+        let p = &self.planes[t as usize];
+        0.5 / (p.inv[0] * p.inv[3] - p.inv[1] * p.inv[2]).abs()
+    }
+
+    /// The three corners of triangle `t`.
+    pub fn corners(&self, t: u32) -> [Vector3<f64>; 3] {
+        self.triangles[t as usize].map(|k| self.vertices[k as usize])
+    }
+}
+
+/// The point of triangle (a, b, c) nearest to p (Ericson, Real-Time Collision Detection, §5.1.5).
+fn closest_point_on_triangle(p: &Vector3<f64>, a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>) -> Vector3<f64> {
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(&ap), ac.dot(&ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return *a;
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(&bp), ac.dot(&bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return *b;
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        return a + ab * (d1 / (d1 - d3));
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(&cp), ac.dot(&cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return *c;
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        return a + ac * (d2 / (d2 - d6));
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    }
+    let denom = 1.0 / (va + vb + vc);
+    a + ab * (vb * denom) + ac * (vc * denom)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A plane z = 0.5 x on [0, 10]², split into 2 × n × n triangles.
+    fn tilted(n: usize) -> Surface {
+        let mut v = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (10.0 * i as f64 / n as f64, 10.0 * j as f64 / n as f64);
+                v.push(Vector3::new(x, y, 0.5 * x));
+            }
+        }
+        let mut t = Vec::new();
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        for j in 0..n {
+            for i in 0..n {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        Surface::new(v, &t).unwrap().0
+    }
+
+    #[test]
+    fn heights_normals_and_holes() {
+        let s = tilted(7);
+        for &(x, y) in &[(0.0, 0.0), (3.3, 7.1), (10.0, 10.0), (5.0, 5.0), (1.0 / 7.0 * 10.0, 2.0)] {
+            let p = s.at(x, y).expect("inside");
+            assert!((p.z_m - 0.5 * x).abs() < 1e-12);
+            let n = Vector3::new(-0.5, 0.0, 1.0).normalize();
+            assert!((p.normal - n).norm() < 1e-12);
+        }
+        assert!(s.at(-0.1, 5.0).is_none());
+        assert!(s.at(5.0, 10.1).is_none());
+        assert!((s.slope_deg(0) - 0.5f64.atan().to_degrees()).abs() < 1e-9);
+    }
+
+    #[test]
+    fn max_height_bounds_the_surface() {
+        let s = tilted(20);
+        for &(a, b) in &[(0.0, 1.0), (2.0, 2.5), (0.0, 10.0), (9.0, 12.0)] {
+            let m = s.max_height_in(a, b, 3.0, 4.0);
+            assert!(m >= 0.5 * b.min(10.0) - 1e-12, "{a} {b} {m}");
+            assert!(m <= 0.5 * b.min(10.0) + 2.0, "{a} {b} {m}: too loose");
+        }
+        assert_eq!(s.max_height_in(20.0, 30.0, 20.0, 30.0), s.max_height_in(20.0, 30.0, 20.0, 30.0));
+    }
+
+    #[test]
+    fn degenerate_triangles_are_dropped_and_vertical_ones_give_no_height() {
+        let v = vec![
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(0.0, 1.0, 0.0),
+            Vector3::new(2.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 1.0),
+        ];
+        let (s, kept, stats) = Surface::new(v, &[[0, 1, 2], [0, 1, 3], [0, 0, 2], [0, 1, 4]]).unwrap();
+        assert_eq!(kept, vec![0, 3]);
+        assert_eq!(stats, SurfaceStats { triangles: 2, degenerate_dropped: 2, vertical: 1 });
+        assert!(s.at(0.2, 0.2).is_some());
+    }
+}
+
+#[cfg(test)]
+mod penetration_tests {
+    use super::*;
+
+    #[test]
+    fn penetration_finds_the_nearest_face() {
+        // A step: floor z = 0 for x < 10, a 60° face up to z = 5, a floor z = 5 beyond.
+        let run = 5.0 / 60f64.to_radians().tan();
+        let xs = [0.0, 10.0, 10.0 + run, 30.0];
+        let zs = [0.0, 0.0, 5.0, 5.0];
+        let mut v = Vec::new();
+        for y in [0.0, 10.0] {
+            for (x, z) in xs.iter().zip(zs) {
+                v.push(Vector3::new(*x, y, z));
+            }
+        }
+        let t: Vec<[u32; 3]> = (0..3u32).flat_map(|i| [[i, i + 1, 5 + i], [i, 5 + i, 4 + i]]).collect();
+        let (s, _, _) = Surface::new(v, &t).unwrap();
+        // A point 1 cm inside the face, halfway up.
+        let n = Vector3::new(-60f64.to_radians().sin(), 0.0, 60f64.to_radians().cos());
+        let on_face = Vector3::new(10.0 + run / 2.0, 5.0, 2.5);
+        let (depth, normal, _) = s.penetration(&(on_face - n * 0.01)).unwrap();
+        assert!((depth - 0.01).abs() < 1e-9, "{depth}");
+        assert!((normal - n).norm() < 1e-6, "{normal:?}");
+        // Above the ground: nothing.
+        assert!(s.penetration(&(on_face + n * 0.01)).is_none());
+        // Just past the top crest, 5 cm below the upper floor and 1 cm from the crest: nearest is the crest edge.
+        let p = Vector3::new(10.0 + run + 0.01, 5.0, 4.95);
+        let (depth, _, _) = s.penetration(&p).unwrap();
+        assert!(depth < 0.05, "{depth}");
+    }
+}

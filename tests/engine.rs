@@ -1,0 +1,235 @@
+//! Closed forms and invariants of the 3DRB engine.
+
+use approx::assert_relative_eq;
+use nalgebra::{UnitQuaternion, Vector3};
+use talus::random::{stream, TruncNormal};
+use talus::rock::{RockBody, RockSize, ShapeKind};
+use talus::sim::{simulate, Impact, Observer, RigidState, Sample, SimParams, StopReason, GRAVITY_MPS2};
+use talus::terrain::{Material, Terrain};
+
+fn material(cr: f64, static_deg: f64, dynamic_deg: f64) -> Material {
+    Material { name: "m".into(), cr: TruncNormal::fixed(cr), static_friction_deg: static_deg, dynamic_friction_deg: dynamic_deg }
+}
+
+fn rock(kind: ShapeKind, mass_kg: f64) -> RockBody {
+    RockBody::new(&kind, RockSize::Mass { mass_kg, density_kg_m3: 2650.0 }, "rock").unwrap()
+}
+
+#[derive(Default)]
+struct Record {
+    samples: Vec<Sample>,
+    impacts: Vec<Impact>,
+}
+
+impl Observer for Record {
+    fn sample(&mut self, s: &Sample) {
+        self.samples.push(*s);
+    }
+    fn impact(&mut self, i: &Impact) {
+        self.impacts.push(*i);
+    }
+}
+
+fn at_rest(position: Vector3<f64>, orientation: UnitQuaternion<f64>) -> RigidState {
+    RigidState { position_m: position, velocity_mps: Vector3::zeros(), orientation, omega_body_radps: Vector3::zeros() }
+}
+
+#[test]
+fn free_flight_follows_the_parabola_and_keeps_its_spin() {
+    let terrain = Terrain::from_function(400.0, 4, material(0.3, 40.0, 30.0), |_, _| 0.0).unwrap();
+    let r = rock(ShapeKind::FlatBox, 500.0);
+    let v0 = Vector3::new(12.0, 3.0, 8.0);
+    let x0 = Vector3::new(50.0, 50.0, 300.0);
+    let start = RigidState {
+        position_m: x0,
+        velocity_mps: v0,
+        orientation: UnitQuaternion::from_euler_angles(0.3, 0.2, 0.1),
+        omega_body_radps: Vector3::new(0.3, 4.0, 0.5),
+    };
+    let mut rec = Record::default();
+    let params = SimParams { max_time_s: 5.0, ..Default::default() };
+    simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut rec);
+    let e_rot0 = start.rotational_energy_j(&r.inertia_kg_m2);
+    let in_flight: Vec<&Sample> = rec.samples.iter().filter(|s| s.t_s > 0.0 && s.t_s <= 5.0).collect();
+    assert!(in_flight.len() > 20);
+    for s in in_flight {
+        let t = s.t_s;
+        let want = x0 + v0 * t + Vector3::new(0.0, 0.0, -0.5 * GRAVITY_MPS2 * t * t);
+        assert!((s.position_m - want).norm() < 1e-9 * want.norm(), "t={t}: {:?} vs {want:?}", s.position_m);
+        let e_rot = s.kinetic_j - s.translational_j;
+        assert_relative_eq!(e_rot, e_rot0, max_relative = 1e-9);
+    }
+}
+
+#[test]
+fn cube_dropped_flat_rebounds_with_cr_times_impact_speed_and_no_spin() {
+    let cr = 0.5;
+    let terrain = Terrain::from_function(40.0, 8, material(cr, 40.0, 30.0), |_, _| 0.0).unwrap();
+    let r = rock(ShapeKind::Cube, 2650.0); // 1 m cube
+    let drop_m = 2.0;
+    let start = at_rest(Vector3::new(20.3, 20.1, 0.5 + drop_m), UnitQuaternion::identity());
+    let mut rec = Record::default();
+    let params = SimParams { max_time_s: 1.5, ..Default::default() };
+    simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut rec);
+    let first = rec.impacts.first().expect("an impact");
+    let v_in = (2.0 * GRAVITY_MPS2 * drop_m).sqrt();
+    assert_relative_eq!(first.approach_speed_mps, v_in, max_relative = 0.01);
+    // After the impact and before the next one: a free rise whose apex gives the rebound speed.
+    let rising = rec.samples.iter().find(|s| s.t_s > first.t_s && !s.in_contact && s.velocity_mps.z > 0.0).expect("rising");
+    let v_out = (rising.velocity_mps.z.powi(2) + 2.0 * GRAVITY_MPS2 * rising.clearance_m).sqrt();
+    let apex_clearance = rising.clearance_m + rising.velocity_mps.z.powi(2) / (2.0 * GRAVITY_MPS2);
+    assert_relative_eq!(v_out, cr * v_in, max_relative = 0.01);
+    assert_relative_eq!(apex_clearance, cr * cr * drop_m, max_relative = 0.02);
+    assert!(rising.spin_radps < 1e-6, "spin {}", rising.spin_radps);
+    assert!(rising.velocity_mps.x.abs() < 1e-9 && rising.velocity_mps.y.abs() < 1e-9);
+}
+
+/// A plane rising toward −x at `slope_deg`, so that "downslope" is +x.
+fn incline(slope_deg: f64, m: Material) -> Terrain {
+    let t = slope_deg.to_radians().tan();
+    Terrain::from_function(200.0, 20, m, move |x, _| (200.0 - x) * t).unwrap()
+}
+
+/// Start pose of a box resting flat on the incline with its long axis downslope.
+fn resting_on_incline(r: &RockBody, slope_deg: f64, x: f64, speed_mps: f64) -> RigidState {
+    // Body axes of a built-in box: principal axes; find the shortest extent's axis to put it normal to the slope.
+    let (mut min_axis, mut max_axis) = (0, 0);
+    for a in 0..3 {
+        let ext = |a: usize| r.vertices_m.iter().map(|v| v[a].abs()).fold(0.0, f64::max);
+        if ext(a) < ext(min_axis) {
+            min_axis = a;
+        }
+        if ext(a) > ext(max_axis) {
+            max_axis = a;
+        }
+    }
+    let half_thickness = r.vertices_m.iter().map(|v| v[min_axis].abs()).fold(0.0, f64::max);
+    let th = slope_deg.to_radians();
+    let normal = Vector3::new(th.sin(), 0.0, th.cos());
+    let down = Vector3::new(th.cos(), 0.0, -th.sin());
+    let axis = |i: usize| Vector3::ith(i, 1.0);
+    // Rotation taking body min_axis to the slope normal and max_axis downslope.
+    let third = normal.cross(&down);
+    let world = nalgebra::Matrix3::from_columns(&[down, third, normal]);
+    let body = nalgebra::Matrix3::from_columns(&[axis(max_axis), axis(max_axis).cross(&axis(min_axis)) * -1.0, axis(min_axis)]);
+    let rot = nalgebra::Rotation3::from_matrix_unchecked(world * body.transpose());
+    let q = UnitQuaternion::from_rotation_matrix(&rot);
+    let ground = (200.0 - x) * th.tan();
+    RigidState {
+        position_m: Vector3::new(x, 100.0, ground) + normal * half_thickness,
+        velocity_mps: down * speed_mps,
+        orientation: q,
+        omega_body_radps: Vector3::zeros(),
+    }
+}
+
+#[test]
+fn block_sliding_down_an_incline_stops_where_the_closed_form_says() {
+    let (slope, phi_d) = (10.0f64, 30.0f64);
+    let terrain = incline(slope, material(0.0, 32.0, phi_d));
+    let r = rock(ShapeKind::FlatBox, 1000.0);
+    let v0 = 5.0;
+    let start = resting_on_incline(&r, slope, 60.0, v0);
+    let out = simulate(&terrain, &r, start, &SimParams::default(), &mut stream(1, 0), &mut ());
+    assert_eq!(out.stop_reason, StopReason::Stopped);
+    let (th, mu) = (slope.to_radians(), phi_d.to_radians().tan());
+    let want = v0 * v0 / (2.0 * GRAVITY_MPS2 * (mu * th.cos() - th.sin()));
+    let moved = (out.final_state.position_m - start.position_m).norm();
+    assert_relative_eq!(moved, want, max_relative = 0.005);
+    assert!(out.final_state.omega_body_radps.norm() < 0.2);
+}
+
+#[test]
+fn block_on_an_incline_below_its_static_friction_angle_stays_put() {
+    let terrain = incline(25.0, material(0.0, 30.0, 20.0));
+    let r = rock(ShapeKind::FlatBox, 1000.0);
+    let start = resting_on_incline(&r, 25.0, 60.0, 0.0);
+    let out = simulate(&terrain, &r, start, &SimParams::default(), &mut stream(1, 0), &mut ());
+    assert_eq!(out.stop_reason, StopReason::Stopped);
+    assert!((out.final_state.position_m - start.position_m).norm() < 0.01);
+}
+
+/// A rough slope: 35° mean with bumps, falling toward +x.
+fn rough_slope(m: Material) -> Terrain {
+    Terrain::from_function(200.0, 80, m, |x, y| {
+        (200.0 - x) * 35f64.to_radians().tan() + 1.5 * (0.31 * x).sin() * (0.23 * y).cos() + 0.7 * (1.1 * x + 0.4 * y).sin()
+    })
+    .unwrap()
+}
+
+struct EnergyCheck {
+    impacts: usize,
+    worst_gain: f64,
+}
+
+impl Observer for EnergyCheck {
+    fn impact(&mut self, i: &Impact) {
+        self.impacts += 1;
+        self.worst_gain = self.worst_gain.max((i.kinetic_after_j - i.kinetic_before_j) / i.kinetic_before_j.max(1e-9));
+    }
+}
+
+#[test]
+fn no_impact_adds_energy_and_no_rock_ends_below_the_surface() {
+    let m = Material { name: "m".into(), cr: TruncNormal { mean: 0.6, sd: 0.3, min: 0.0, max: 1.0 }, static_friction_deg: 35.0, dynamic_friction_deg: 30.0 };
+    let terrain = rough_slope(m);
+    let params = SimParams { cr_draw: talus::sim::CrDraw::PerImpact, max_time_s: 30.0, ..Default::default() };
+    let shapes = [ShapeKind::Cube, ShapeKind::FlatBox, ShapeKind::Smartie];
+    let mut total_impacts = 0;
+    for i in 0..12u64 {
+        let mut rng = stream(5, i);
+        let r = rock(shapes[i as usize % 3].clone(), [50.0, 800.0, 5000.0][i as usize % 3 / 1 % 3]);
+        let q = talus::rock::random_orientation(&mut rng);
+        let x = 20.0 + 3.0 * i as f64;
+        let z = terrain.surface.height(x, 100.0).unwrap() + r.bounding_radius_m + 0.5;
+        let start = RigidState { position_m: Vector3::new(x, 100.0, z), velocity_mps: Vector3::new(2.0, 0.0, 0.0), orientation: q, omega_body_radps: Vector3::zeros() };
+        let mut check = EnergyCheck { impacts: 0, worst_gain: 0.0 };
+        let out = simulate(&terrain, &r, start, &params, &mut rng, &mut check);
+        assert!(check.worst_gain <= 1e-9, "rock {i}: an impact added {:.3e} of the energy", check.worst_gain);
+        total_impacts += check.impacts;
+        let p = out.final_state.position_m;
+        if let Some(ground) = terrain.surface.height(p.x, p.y) {
+            assert!(p.z > ground, "rock {i} ends with its centre below the ground: {} < {ground}", p.z);
+            let rot = out.final_state.orientation.to_rotation_matrix();
+            for v in &r.vertices_m {
+                let q = p + rot * v;
+                if let Some(g) = terrain.surface.height(q.x, q.y) {
+                    assert!(q.z > g - 0.05, "rock {i}: a vertex ends {} m below the ground", g - q.z);
+                }
+            }
+        }
+    }
+    assert!(total_impacts > 50, "only {total_impacts} impacts: the test is not exercising impacts");
+}
+
+#[test]
+fn no_tunnelling_through_a_thin_wall_at_40_mps() {
+    // A flat floor with a wall 0.2 m thick and 3 m high across x = 30 m.
+    let m = material(0.3, 40.0, 30.0);
+    let mut v = Vec::new();
+    let xs = [0.0, 29.9, 29.9001, 30.0999, 30.1, 60.0];
+    let zs = [0.0, 0.0, 3.0, 3.0, 0.0, 0.0];
+    for y in [0.0, 20.0] {
+        for (x, z) in xs.iter().zip(zs) {
+            v.push(Vector3::new(*x, y, z));
+        }
+    }
+    let n = xs.len() as u32;
+    let mut t = Vec::new();
+    for i in 0..n - 1 {
+        t.push([i, i + 1, n + i + 1]);
+        t.push([i, n + i + 1, n + i]);
+    }
+    let terrain = Terrain::from_local(v, &t, &vec![0; t.len()], vec![m]).unwrap();
+    for shape in [ShapeKind::Cube, ShapeKind::Smartie] {
+        let r = rock(shape, 100.0);
+        let start = RigidState {
+            position_m: Vector3::new(10.0, 10.0, 1.5),
+            velocity_mps: Vector3::new(40.0, 0.0, 0.0),
+            orientation: UnitQuaternion::from_euler_angles(0.4, 0.1, 0.7),
+            omega_body_radps: Vector3::new(0.0, 10.0, 0.0),
+        };
+        let out = simulate(&terrain, &r, start, &SimParams { max_time_s: 10.0, ..Default::default() }, &mut stream(1, 0), &mut ());
+        assert!(out.final_state.position_m.x < 30.0, "{} went through the wall: {:?}", r.shape, out.final_state.position_m);
+    }
+}
