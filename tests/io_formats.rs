@@ -287,6 +287,16 @@ fn geotiff_written_by_gdal() {
         assert_eq!((back.ncols, back.nrows), (ours.ncols, ours.nrows), "{name}");
         assert_eq!((back.x_min_m, back.y_max_m, back.cell_x_m, back.cell_y_m), (2_600_000.0, 1_200_060.0, 2.0, 2.0));
         assert_eq!(back.crs.epsg, Some(2056), "{name}");
+        // GDAL's GeoKeys (with citation keys into GeoAsciiParams) pass through our writer intact.
+        if name.starts_with("tiled") {
+            let keys = back.crs.geokeys.as_ref().expect("GDAL wrote GeoKeys");
+            assert!(!keys.ascii_params.is_empty(), "GDAL writes citations");
+            let out = p(dir.path(), "passthrough.tif");
+            geotiff::write_grid(&out, &back).unwrap();
+            assert_eq!(geotiff::read_grid(&out).unwrap().crs, back.crs);
+            let info = run("gdalinfo", &[out.to_str().unwrap()]);
+            assert!(info.contains("ID[\"EPSG\",2056]"), "{info}");
+        }
         if name.contains("int32") {
             // GDAL rounded to integers.
             let close =
