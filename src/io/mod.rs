@@ -1,6 +1,12 @@
 //! File formats: terrain meshes and grids in, rasters and tables out. Formats only, no physics.
 
+pub mod ascii_grid;
 pub mod atomic;
+pub mod geotiff;
+mod grid_check;
+pub mod obj;
+pub mod points;
+pub mod stl;
 
 pub use atomic::{write_atomic, write_bytes_atomic};
 
