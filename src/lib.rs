@@ -9,12 +9,15 @@
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod campaign;
+pub mod ensemble;
 pub mod hazard;
 pub mod io;
 pub mod parallel;
 pub mod random;
 pub mod raster;
 pub mod rock;
+pub mod run;
 pub mod scenario;
 pub mod sim;
 pub mod source;

@@ -78,7 +78,7 @@ impl Sources {
             let to_local = |p: &[f64; 2]| horizontal_to_local(terrain.up, &terrain.origin, *p);
             let pts: Vec<[f64; 2]> = spec.points.iter().map(to_local).collect();
             let (geometry, area) = match spec.kind {
-                SourceKind::Point | SourceKind::Polyline => {
+                SourceKind::Point | SourceKind::Polyline | SourceKind::Campaign => {
                     for (k, p) in pts.iter().enumerate() {
                         if terrain.surface.at(p[0], p[1]).is_none() {
                             return Err(Error::invalid(

@@ -5,6 +5,7 @@
 //! back in the terrain's own frame and CRS.
 
 pub mod bench;
+pub mod build;
 pub mod material;
 pub mod surface;
 
