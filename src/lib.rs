@@ -12,6 +12,7 @@ pub mod error;
 pub mod io;
 pub mod random;
 pub mod raster;
+pub mod render;
 pub mod terrain;
 
 pub use error::{Error, Result};
