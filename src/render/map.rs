@@ -255,6 +255,27 @@ fn sample_bilinear(g: &Grid, x: f64, y: f64) -> Option<f64> {
     (wsum > 1e-9).then(|| sum / wsum)
 }
 
+/// The hillshade `s` around map point (x, y): bilinear at the point for `n` = 1, else the mean of n × n bilinear
+/// samples spread over the pixel (`1 / ppm` metres wide).
+fn shade_at(s: &Grid, x: f64, y: f64, n: usize, ppm: f64) -> Option<f64> {
+    if n <= 1 {
+        return sample_bilinear(s, x, y);
+    }
+    let mut sum = 0.0;
+    let mut k = 0;
+    for i in 0..n {
+        for j in 0..n {
+            let dx = ((i as f64 + 0.5) / n as f64 - 0.5) / ppm;
+            let dy = ((j as f64 + 0.5) / n as f64 - 0.5) / ppm;
+            if let Some(v) = sample_bilinear(s, x + dx, y + dy) {
+                sum += v;
+                k += 1;
+            }
+        }
+    }
+    (k > 0).then(|| sum / k as f64)
+}
+
 /// How layer values become colours.
 enum Painter {
     Ramp { colormap: Colormap, lo: f64, hi: f64, log: bool, transparent_zero: bool },
@@ -505,6 +526,8 @@ fn compose(
     // Map pixels: hillshade grey, then the layer.
     let shade = terrain.map(|t| hillshade(t, SUN_AZIMUTH_DEG, SUN_ALTITUDE_DEG));
     let alpha = if shade.is_some() { LAYER_ALPHA } else { 1.0 };
+    // Terrain finer than the pixels is averaged over n × n samples per pixel rather than aliased.
+    let shade_sub = terrain.map_or(1, |t| (1.0 / (ppm * t.cell_x_m.min(t.cell_y_m))).ceil().clamp(1.0, 4.0) as usize);
     let cols = cell_ranges(map_w, g.ncols, ppm * g.cell_x_m);
     let rows = cell_ranges(map_h, g.nrows, ppm * g.cell_y_m);
     for py in 0..map_h {
@@ -512,7 +535,7 @@ fn compose(
         for px in 0..map_w {
             let x = extent.0 + (px as f64 + 0.5) / ppm;
             let base = match &shade {
-                Some(s) => sample_bilinear(s, x, y).map(|h| [shade_grey(h); 3]).unwrap_or(NO_TERRAIN),
+                Some(s) => shade_at(s, x, y, shade_sub, ppm).map(|h| [shade_grey(h); 3]).unwrap_or(NO_TERRAIN),
                 None => NO_TERRAIN,
             };
             let (ox, oy) = (map_x0 + px as i32, map_y0 + py as i32);
