@@ -16,6 +16,7 @@ pub mod io;
 pub mod parallel;
 pub mod random;
 pub mod raster;
+pub mod render;
 pub mod rock;
 pub mod run;
 pub mod scenario;
