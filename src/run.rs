@@ -70,6 +70,8 @@ pub struct RunSummary {
     pub energy_guards: u64,
     /// Contact steps over all rocks.
     pub contact_steps: u64,
+    /// Contact-solver sweeps over all rocks.
+    pub solver_sweeps: u64,
     /// Wall-clock time, s.
     pub wall_time_s: f64,
     /// Rocks per second of wall-clock time.
@@ -217,7 +219,7 @@ pub fn run_scenario(sc: &Scenario, overrides: &RunOverrides, out_dir: &Path, pro
     let mut paths: Vec<(usize, Vec<Sample>)> = Vec::new();
     let mut reasons: BTreeMap<String, usize> = StopReason::ALL.iter().map(|r| (r.as_str().to_string(), 0)).collect();
     let (mut runouts, mut times, mut energies, mut bounces) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
-    let (mut guards, mut contact_steps) = (0u64, 0u64);
+    let (mut guards, mut contact_steps, mut sweeps) = (0u64, 0u64, 0u64);
     let mut write_error = None;
     crate::parallel::map_in_order(
         n,
@@ -242,6 +244,7 @@ pub fn run_scenario(sc: &Scenario, overrides: &RunOverrides, out_dir: &Path, pro
             bounces.push(o.max_bounce_m);
             guards += o.energy_guards as u64;
             contact_steps += o.contact_steps;
+            sweeps += o.solver_sweeps;
             let r = terrain.to_file_frame(&rec.release_m);
             let e = terrain.to_file_frame(&end);
             let line = format!(
@@ -328,6 +331,7 @@ pub fn run_scenario(sc: &Scenario, overrides: &RunOverrides, out_dir: &Path, pro
         max_bounce_m: Stats::of(&mut bounces),
         energy_guards: guards,
         contact_steps,
+        solver_sweeps: sweeps,
         wall_time_s: wall,
         rocks_per_second: n as f64 / wall.max(1e-9),
         outputs: {

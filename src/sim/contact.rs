@@ -29,6 +29,9 @@ pub struct Contact {
     pub normal: Vector3<f64>,
     /// Penetration depth along the normal, m (≥ 0).
     pub depth_m: f64,
+    /// Impulses (normal, tangential in the contact's own basis) to start the solver from: the previous step's
+    /// for a contact that persists (warm start), zero otherwise.
+    pub warm: (f64, [f64; 2]),
     /// Ground triangle.
     pub triangle: u32,
     /// Restitution coefficient for this contact.
@@ -78,7 +81,12 @@ pub struct SolverSettings {
     pub max_iterations: usize,
 }
 
+/// Reusable solver memory (one per rock run), so that a step allocates nothing.
+#[derive(Debug, Default)]
+pub struct Scratch(Vec<Row>);
+
 /// Per-contact rows in body-frame form: u_d = v·d + Ω·J_d for d in (n, t1, t2).
+#[derive(Debug)]
 struct Row {
     n: Vector3<f64>,
     t1: Vector3<f64>,
@@ -101,21 +109,22 @@ struct Row {
 
 /// Resolves `contacts` for a rock at orientation `q` (the step's midpoint). `before` are the velocities at the start
 /// of the step (they set the restitution targets), `free` those after gravity and free rotation over the step.
-/// Returns the velocities at the end of the step.
+/// Returns the velocities at the end of the step, and writes the final impulses into each contact's `warm`.
 pub fn solve(
     rock: &RockBody,
     q: &UnitQuaternion<f64>,
-    contacts: &[Contact],
+    contacts: &mut [Contact],
     before: &Velocities,
     free: &Velocities,
     settings: &SolverSettings,
+    scratch: &mut Scratch,
 ) -> (Velocities, SolveReport) {
     let inv_m = 1.0 / rock.mass_kg;
     let inv_i = rock.inertia_kg_m2.map(|v| 1.0 / v);
     let mut max_approach = 0.0f64;
-    let mut rows: Vec<Row> = contacts
-        .iter()
-        .map(|c| {
+    let rows = &mut scratch.0;
+    rows.clear();
+    rows.extend(contacts.iter().map(|c| {
             let n = c.normal;
             let t1 = any_perpendicular(&n);
             let t2 = n.cross(&t1);
@@ -132,10 +141,12 @@ pub fn solve(
             max_approach = max_approach.max(-un);
             let target = if -un > settings.bounce_threshold_mps { -c.cr * un } else { 0.0 };
             let mu = if slip < settings.stick_speed_mps { c.mu_static } else { c.mu_dynamic };
-            Row { n, t1, t2, jn, jt1, jt2, mn, mt1, mt2, k_nn, k_tt, k_tt_inv, target, mu, lambda_n: 0.0, lambda_t: Vector2::zeros() }
-        })
-        .collect();
-    let (after, iterations) = sweep(&mut rows, free, inv_m, settings.max_iterations);
+            let (wn, wt) = c.warm;
+            let lambda_t = Vector2::new(wt[0], wt[1]);
+            let lambda_n = wn.max(0.0);
+            Row { n, t1, t2, jn, jt1, jt2, mn, mt1, mt2, k_nn, k_tt, k_tt_inv, target, mu, lambda_n, lambda_t }
+    }));
+    let (mut after, iterations) = sweep(rows, free, inv_m, settings.max_iterations);
     let mut report = SolveReport { iterations, energy_guard: false, max_approach_mps: max_approach };
     let e_free = free.kinetic_energy_j(rock);
     if after.kinetic_energy_j(rock) > e_free * (1.0 + 1e-12) + 1e-12 {
@@ -144,23 +155,33 @@ pub fn solve(
             r.lambda_n = 0.0;
             r.lambda_t = Vector2::zeros();
         }
-        let (again, it2) = sweep(&mut rows, free, inv_m, settings.max_iterations);
+        let (again, it2) = sweep(rows, free, inv_m, settings.max_iterations);
         report.iterations += it2;
         report.energy_guard = true;
-        return (again, report);
+        after = again;
+    }
+    for (c, r) in contacts.iter_mut().zip(rows.iter()) {
+        c.warm = (r.lambda_n, [r.lambda_t.x, r.lambda_t.y]);
     }
     (after, report)
 }
 
+/// Velocity change below which the sweeps stop, m/s (ours): far below any velocity that matters to a rock's path.
+const CONVERGED_MPS: f64 = 1e-6;
+
 fn sweep(rows: &mut [Row], free: &Velocities, inv_m: f64, max_iterations: usize) -> (Velocities, usize) {
     let mut v = free.linear_mps;
     let mut w = free.angular_body_radps;
+    // Apply the warm-start impulses.
+    for r in rows.iter() {
+        v += (r.n * r.lambda_n + r.t1 * r.lambda_t.x + r.t2 * r.lambda_t.y) * inv_m;
+        w += r.mn * r.lambda_n + r.mt1 * r.lambda_t.x + r.mt2 * r.lambda_t.y;
+    }
     let n = rows.len();
     let mut used = 0;
     for it in 0..max_iterations {
         used = it + 1;
         let mut change = 0.0f64;
-        let mut scale = 1e-12f64;
         for k in 0..n {
             let r = if it % 2 == 0 { &mut rows[k] } else { &mut rows[n - 1 - k] };
             // Normal impulse.
@@ -192,10 +213,9 @@ fn sweep(rows: &mut [Row], free: &Velocities, inv_m: f64, max_iterations: usize)
             r.lambda_t = lt;
             v += (r.t1 * dt.x + r.t2 * dt.y) * inv_m;
             w += r.mt1 * dt.x + r.mt2 * dt.y;
-            change = change.max(dn.abs()).max(dt.x.abs()).max(dt.y.abs());
-            scale = scale.max(r.lambda_n);
+            change = change.max(dn.abs() * r.k_nn).max((r.k_tt * dt).norm());
         }
-        if change <= 1e-10 * scale {
+        if change <= CONVERGED_MPS {
             break;
         }
     }

@@ -11,7 +11,7 @@
 //! duration), `left_terrain` (no surface under the centre of mass), or `max_time`.
 
 use super::body::{free_rotation_step, rotate, RigidState};
-use super::contact::{solve, Contact, SolverSettings, Velocities};
+use super::contact::{solve, Contact, Scratch, SolverSettings, Velocities};
 use super::params::{CrDraw, SimParams};
 use crate::random::Rng;
 use crate::rock::RockBody;
@@ -149,6 +149,8 @@ pub struct Outcome {
     pub contact_steps: u64,
     /// Times the energy guard fired.
     pub energy_guards: u32,
+    /// Contact-solver sweeps over all steps (a cost measure).
+    pub solver_sweeps: u64,
 }
 
 /// Runs one rock from `start` until it stops. `rng` supplies the restitution draws.
@@ -173,6 +175,8 @@ struct Run<'a> {
     cr: Vec<f64>,
     touching: Vec<bool>,
     contacts: Vec<Contact>,
+    previous: Vec<Contact>,
+    scratch: Scratch,
     last_sample: Option<(Vector3<f64>, f64)>,
     out: Outcome,
     settings: SolverSettings,
@@ -199,6 +203,7 @@ impl<'a> Run<'a> {
             impacts: 0,
             contact_steps: 0,
             energy_guards: 0,
+            solver_sweeps: 0,
         };
         Run {
             terrain,
@@ -210,6 +215,8 @@ impl<'a> Run<'a> {
             cr,
             touching: vec![false; rock.vertices_m.len()],
             contacts: Vec::with_capacity(16),
+            previous: Vec::with_capacity(16),
+            scratch: Scratch::default(),
             last_sample: None,
             out,
             settings,
@@ -314,8 +321,16 @@ impl<'a> Run<'a> {
         let in_contact = !self.contacts.is_empty();
         if in_contact {
             self.out.contact_steps += 1;
-            let (solved, report) = solve(rock, &q_mid, &self.contacts, &before, &free, &self.settings);
+            // Warm start: a contact that persists from the previous step (same vertex, same triangle) starts from its
+            // previous impulses.
+            for c in self.contacts.iter_mut() {
+                if let Some(p) = self.previous.iter().find(|p| p.vertex == c.vertex && p.triangle == c.triangle) {
+                    c.warm = p.warm;
+                }
+            }
+            let (solved, report) = solve(rock, &q_mid, &mut self.contacts, &before, &free, &self.settings, &mut self.scratch);
             after = solved;
+            self.out.solver_sweeps += report.iterations as u64;
             if report.energy_guard {
                 self.out.energy_guards += 1;
             }
@@ -358,6 +373,7 @@ impl<'a> Run<'a> {
         if deepest > self.params.penetration_slop_m {
             self.s.position_m += push.normalize() * (0.5 * (deepest - self.params.penetration_slop_m));
         }
+        std::mem::swap(&mut self.previous, &mut self.contacts);
         self.t += h;
         in_contact
     }
@@ -374,20 +390,22 @@ impl<'a> Run<'a> {
         let rot = q.to_rotation_matrix();
         for (i, b) in self.rock.vertices_m.iter().enumerate() {
             let p = x + rot * b;
-            if p.z > top {
+            if p.z > top || p.z > surface.bin_max_height(p.x, p.y) {
                 continue;
             }
             if let Some((depth, normal, triangle)) = surface.penetration(&p) {
-                let m = self.terrain.material_of(triangle);
+                let m = self.terrain.triangle_material[triangle as usize] as usize;
+                let (mu_static, mu_dynamic) = self.terrain.friction[m];
                 self.contacts.push(Contact {
                     vertex: i,
                     point_m: p,
                     normal,
                     depth_m: depth,
+                    warm: (0.0, [0.0; 2]),
                     triangle,
-                    cr: self.cr[self.terrain.triangle_material[triangle as usize] as usize],
-                    mu_static: m.mu_static(),
-                    mu_dynamic: m.mu_dynamic(),
+                    cr: self.cr[m],
+                    mu_static,
+                    mu_dynamic,
                 });
             }
         }

@@ -52,6 +52,8 @@ pub struct Terrain {
     pub surface: Surface,
     /// Material index (into `materials`) of each surface triangle.
     pub triangle_material: Vec<u16>,
+    /// tan of the static and dynamic friction angles of each material (cached for the contact loop).
+    pub friction: Vec<(f64, f64)>,
     /// Materials.
     pub materials: Vec<Material>,
     /// Local frame origin in talus's z-up axes: a file point p maps to `up.to_internal(p) - origin`.
@@ -94,7 +96,8 @@ impl Terrain {
             crate::Error::invalid("terrain", "no usable triangle (all are degenerate or vertical)", "check the terrain files")
         })?;
         let triangle_material = kept.iter().map(|&i| triangle_material[i]).collect();
-        Ok(Terrain { surface, triangle_material, materials, origin: Vector3::zeros(), up: UpAxis::Z, crs: Crs::default(), stats })
+        let friction = materials.iter().map(|m| (m.mu_static(), m.mu_dynamic())).collect();
+        Ok(Terrain { surface, triangle_material, friction, materials, origin: Vector3::zeros(), up: UpAxis::Z, crs: Crs::default(), stats })
     }
 
     /// A square grid terrain over [0, size]² with `n` × `n` cells and heights `z(x, y)`, one material. For tests,

@@ -41,6 +41,7 @@ pub struct Surface {
     vertices: Vec<Vector3<f64>>,
     triangles: Vec<[u32; 3]>,
     planes: Vec<TriPlane>,
+    normals: Vec<Vector3<f64>>,
     x0: f64,
     y0: f64,
     bin_m: f64,
@@ -121,15 +122,29 @@ impl Surface {
             let (a, b, c) = (vertices[t[0] as usize], vertices[t[1] as usize], vertices[t[2] as usize]);
             area += 0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)).abs();
         }
-        // About one to two triangles per bin.
-        let bin_m = (1.5 * area / (stats.triangles - stats.vertical) as f64).sqrt().max(1e-3);
+        // Bins of half the typical triangle leg (half a DEM cell): with exact overlap tests, one or two triangles
+        // per bin.
+        let bin_m = (0.5 * area / (stats.triangles - stats.vertical) as f64).sqrt().max(1e-3);
         let nx = (((hi.x - lo.x) / bin_m).floor() as usize + 1).min(1 << 15);
         let ny = (((hi.y - lo.y) / bin_m).floor() as usize + 1).min(1 << 15);
         let bin_m = bin_m.max((hi.x - lo.x) / nx as f64).max((hi.y - lo.y) / ny as f64) * (1.0 + 1e-9);
+        let normals = tris
+            .iter()
+            .zip(&planes)
+            .map(|(t, p)| {
+                if p.vertical {
+                    let [a, b, c] = t.map(|k| vertices[k as usize]);
+                    (b - a).cross(&(c - a)).normalize()
+                } else {
+                    Vector3::new(-p.a, -p.b, 1.0).normalize()
+                }
+            })
+            .collect();
         let mut surface = Surface {
             vertices,
             triangles: tris,
             planes,
+            normals,
             x0: lo.x,
             y0: lo.y,
             bin_m,
@@ -153,43 +168,39 @@ impl Surface {
 
     fn build_index(&mut self) {
         let (nx, ny) = (self.nx, self.ny);
-        let mut counts = vec![0u32; nx * ny + 1];
-        let ranges: Vec<(usize, usize, usize, usize)> = self
-            .triangles
-            .iter()
-            .map(|t| {
-                let p = t.map(|k| self.vertices[k as usize]);
-                let (x_lo, x_hi) = (p[0].x.min(p[1].x).min(p[2].x), p[0].x.max(p[1].x).max(p[2].x));
-                let (y_lo, y_hi) = (p[0].y.min(p[1].y).min(p[2].y), p[0].y.max(p[1].y).max(p[2].y));
-                let (i0, i1) = self.bin_range(x_lo, x_hi, self.x0, nx);
-                let (j0, j1) = self.bin_range(y_lo, y_hi, self.y0, ny);
-                (i0, i1, j0, j1)
-            })
-            .collect();
-        for &(i0, i1, j0, j1) in &ranges {
+        // (bin, triangle) pairs for every bin the triangle's footprint touches (closed sets, with a small margin
+        // so that points on shared edges find a triangle in their bin).
+        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(self.triangles.len() * 4);
+        let mut zmax = vec![f64::NEG_INFINITY; nx * ny];
+        let eps = 1e-9 * self.bin_m;
+        for (t, tri) in self.triangles.iter().enumerate() {
+            let p = tri.map(|k| self.vertices[k as usize]);
+            let (x_lo, x_hi) = (p[0].x.min(p[1].x).min(p[2].x), p[0].x.max(p[1].x).max(p[2].x));
+            let (y_lo, y_hi) = (p[0].y.min(p[1].y).min(p[2].y), p[0].y.max(p[1].y).max(p[2].y));
+            let tz = p[0].z.max(p[1].z).max(p[2].z);
+            let (i0, i1) = self.bin_range(x_lo - eps, x_hi + eps, self.x0, nx);
+            let (j0, j1) = self.bin_range(y_lo - eps, y_hi + eps, self.y0, ny);
             for j in j0..=j1 {
                 for i in i0..=i1 {
-                    counts[j * nx + i + 1] += 1;
+                    let bx = self.x0 + i as f64 * self.bin_m;
+                    let by = self.y0 + j as f64 * self.bin_m;
+                    if triangle_overlaps_box(&p, bx - eps, by - eps, bx + self.bin_m + eps, by + self.bin_m + eps) {
+                        let k = j * nx + i;
+                        pairs.push((k as u32, t as u32));
+                        zmax[k] = zmax[k].max(tz);
+                    }
                 }
             }
+        }
+        pairs.sort_unstable();
+        let mut counts = vec![0u32; nx * ny + 1];
+        for &(k, _) in &pairs {
+            counts[k as usize + 1] += 1;
         }
         for k in 1..counts.len() {
             counts[k] += counts[k - 1];
         }
-        let mut fill = counts.clone();
-        let mut items = vec![0u32; counts[nx * ny] as usize];
-        let mut zmax = vec![f64::NEG_INFINITY; nx * ny];
-        for (t, &(i0, i1, j0, j1)) in ranges.iter().enumerate() {
-            let tz = self.triangles[t].iter().map(|&k| self.vertices[k as usize].z).fold(f64::NEG_INFINITY, f64::max);
-            for j in j0..=j1 {
-                for i in i0..=i1 {
-                    let k = j * nx + i;
-                    items[fill[k] as usize] = t as u32;
-                    fill[k] += 1;
-                    zmax[k] = zmax[k].max(tz);
-                }
-            }
-        }
+        let items: Vec<u32> = pairs.into_iter().map(|(_, t)| t).collect();
         self.offsets = counts;
         self.items = items;
         let mut levels = vec![(nx, ny, zmax)];
@@ -242,6 +253,18 @@ impl Surface {
         best.map(|(z, t)| SurfacePoint { z_m: z, normal: self.normal(t), triangle: t })
     }
 
+    /// An upper bound of the surface height in the bin holding (x, y) (`NEG_INFINITY` outside or over holes): a
+    /// one-lookup test that a point is above the ground.
+    #[inline]
+    pub fn bin_max_height(&self, x: f64, y: f64) -> f64 {
+        let fi = (x - self.x0) / self.bin_m;
+        let fj = (y - self.y0) / self.bin_m;
+        if !(fi >= 0.0 && fj >= 0.0) || fi as usize >= self.nx || fj as usize >= self.ny {
+            return f64::NEG_INFINITY;
+        }
+        self.zmax[0].2[fj as usize * self.nx + fi as usize]
+    }
+
     /// Height of the surface under (x, y), `None` over holes.
     #[inline]
     pub fn height(&self, x: f64, y: f64) -> Option<f64> {
@@ -252,12 +275,7 @@ impl Surface {
     /// side its winding gives.
     #[inline]
     pub fn normal(&self, t: u32) -> Vector3<f64> {
-        let p = &self.planes[t as usize];
-        if p.vertical {
-            let [a, b, c] = self.corners(t);
-            return (b - a).cross(&(c - a)).normalize();
-        }
-        Vector3::new(-p.a, -p.b, 1.0).normalize()
+        self.normals[t as usize]
     }
 
     /// For a point below the surface: its depth (distance to the nearest point of the surface) and the direction
@@ -362,6 +380,28 @@ impl Surface {
     pub fn corners(&self, t: u32) -> [Vector3<f64>; 3] {
         self.triangles[t as usize].map(|k| self.vertices[k as usize])
     }
+}
+
+/// Whether a triangle's horizontal footprint meets the box [x0, x1] × [y0, y1] (separating axes: the box axes
+/// and the three edge normals).
+fn triangle_overlaps_box(p: &[Vector3<f64>; 3], x0: f64, y0: f64, x1: f64, y1: f64) -> bool {
+    if p.iter().all(|v| v.x < x0) || p.iter().all(|v| v.x > x1) || p.iter().all(|v| v.y < y0) || p.iter().all(|v| v.y > y1) {
+        return false;
+    }
+    let corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)];
+    for e in 0..3 {
+        let (a, b, c) = (p[e], p[(e + 1) % 3], p[(e + 2) % 3]);
+        let (nx, ny) = (-(b.y - a.y), b.x - a.x);
+        let side = |x: f64, y: f64| nx * (x - a.x) + ny * (y - a.y);
+        let inner = side(c.x, c.y);
+        if inner == 0.0 {
+            continue;
+        }
+        if corners.iter().all(|&(x, y)| side(x, y) * inner < 0.0) {
+            return false;
+        }
+    }
+    true
 }
 
 /// The point of triangle (a, b, c) nearest to p (Ericson, Real-Time Collision Detection, §5.1.5).
