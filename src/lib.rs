@@ -10,6 +10,7 @@
 
 pub mod error;
 pub mod io;
+pub mod lumped2d;
 pub mod random;
 pub mod raster;
 pub mod terrain;

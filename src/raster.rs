@@ -93,7 +93,7 @@ impl Grid {
         let c = ((x - self.x_min_m) / self.cell_x_m).floor();
         let r = ((self.y_max_m - y) / self.cell_y_m).floor();
         (c >= 0.0 && r >= 0.0 && (c as usize) < self.ncols && (r as usize) < self.nrows)
-            .then(|| (c as usize, r as usize))
+            .then_some((c as usize, r as usize))
     }
 
     /// Number of cells that hold data.
