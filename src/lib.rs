@@ -13,6 +13,7 @@ pub mod campaign;
 pub mod ensemble;
 pub mod hazard;
 pub mod io;
+pub mod lumped2d;
 pub mod parallel;
 pub mod random;
 pub mod raster;

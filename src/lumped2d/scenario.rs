@@ -1,0 +1,283 @@
+//! The profile scenario: everything `talus profile` needs, read from TOML and checked before any work.
+//!
+//! Unknown keys are errors that name the key and the line. Paths are relative to the scenario file.
+//!
+//! # Format
+//! ```toml
+//! name = "bench stack, 60° faces, 7 m benches"   # optional
+//! rocks = 300              # number of rocks
+//! mass_kg = 1000.0         # rock mass (scales energies; sizes the rock for the arrow-height switch)
+//! seed = 42                # same seed, same results, whatever the thread count (default 0)
+//! envelope_spacing_m = 1.0 # stations for envelopes.csv (default 1 m)
+//! collectors_x_m = [40.0, 60.0]   # vertical collectors for collectors.csv (default none)
+//!
+//! # The profile: a CSV file (x_m,z_m,material; relative to this file) ...
+//! #   profile = { csv = "profile.csv" }
+//! # ... or a benched slope (BenchGeometry; materials "face" and "floor"; top crest at x = crest_floor_m).
+//! [profile.bench]
+//! bench_height_m = 20.0
+//! face_angle_deg = 60.0
+//! bench_width_m = 7.0
+//! n_benches = 5
+//!
+//! # One table per profile material: a Table 1 preset and/or explicit values (see `MaterialSpec`).
+//! [materials.face]
+//! preset = "face_all"
+//! roughness_sd_deg = 2.0
+//!
+//! [materials.floor]
+//! rn = { mean = 0.300, sd = 0.058 }
+//! rt = { mean = 0.622, sd = 0.119 }
+//! friction_angle_deg = 25.0
+//! roughness_sd_deg = 2.0
+//!
+//! # Each value is a number or [min, max], drawn uniformly per rock.
+//! [release]
+//! x_m = [10.0, 10.5]    # m along the profile
+//! height_m = 0.5        # above the profile, m (default 0)
+//! vx_mps = [1.0, 2.0]   # default 0
+//! vz_mps = 0.0          # default 0
+//! spin_radps = 0.0      # default 0; only used with a rotational rule
+//!
+//! # Engine options (see `Options2d`; all optional).
+//! [options]
+//! scale_rn_by_velocity = false
+//! rotation = "off"            # "off" | "rocfall" | "crsp"
+//! friction_angle = "material" # "material" | "from_rt" | "zero"
+//! switch_speed_mps = 0.5
+//! arrow_height_ratio = 0.1
+//! stop_speed_mps = 0.1
+//! max_events = 10000
+//! max_time_s = 600.0
+//! ```
+
+use super::material::{Material2d, MaterialSpec};
+use super::options::Options2d;
+use super::profile::Profile;
+use super::release::{Release2d, ValueRange};
+use super::slope::Slope2d;
+use crate::error::{Error, Result};
+use crate::terrain::BenchGeometry;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Where the profile comes from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum ProfileSource {
+    /// A profile CSV (`x_m,z_m,material`), relative to the scenario file.
+    Csv(PathBuf),
+    /// A benched slope; its materials are `face` and `floor`.
+    Bench(BenchGeometry),
+}
+
+/// The `[release]` table: each value a number or `[min, max]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReleaseSpec {
+    /// Release x, m.
+    pub x_m: ValueRange,
+    /// Height above the profile, m (default: 0).
+    #[serde(default)]
+    pub height_m: ValueRange,
+    /// Horizontal velocity, m/s (default: 0).
+    #[serde(default)]
+    pub vx_mps: ValueRange,
+    /// Vertical velocity, up positive, m/s (default: 0).
+    #[serde(default)]
+    pub vz_mps: ValueRange,
+    /// Spin, rad/s, clockwise positive in the x–z view (default: 0).
+    #[serde(default)]
+    pub spin_radps: ValueRange,
+}
+
+fn default_spacing() -> f64 {
+    1.0
+}
+
+/// A profile scenario as written in TOML (see the module docs for the format).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProfileScenario {
+    /// A name for the run (optional).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// The profile.
+    pub profile: ProfileSource,
+    /// One material per profile material name.
+    pub materials: BTreeMap<String, MaterialSpec>,
+    /// The release.
+    pub release: ReleaseSpec,
+    /// Number of rocks.
+    pub rocks: usize,
+    /// Rock mass, kg.
+    pub mass_kg: f64,
+    /// Random seed (default: 0).
+    #[serde(default)]
+    pub seed: u64,
+    /// Engine options.
+    #[serde(default)]
+    pub options: Options2d,
+    /// Spacing of the envelope stations along x, m (default: 1).
+    #[serde(default = "default_spacing")]
+    pub envelope_spacing_m: f64,
+    /// x of the vertical collectors, m (default: none).
+    #[serde(default)]
+    pub collectors_x_m: Vec<f64>,
+    /// Directory that relative paths are resolved against (the scenario file's folder; not read from TOML).
+    #[serde(skip)]
+    pub base_dir: Option<PathBuf>,
+    /// Where the scenario was read from, for messages (not read from TOML).
+    #[serde(skip)]
+    pub source: Option<String>,
+}
+
+/// A scenario checked and ready to run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ResolvedScenario {
+    /// Profile and materials.
+    pub slope: Slope2d,
+    /// The materials by name, as resolved.
+    pub materials: BTreeMap<String, Material2d>,
+    /// The release, with the scenario's mass.
+    pub release: Release2d,
+    /// Engine options.
+    pub options: Options2d,
+    /// The bench geometry, when the profile is a benched slope.
+    pub bench: Option<BenchGeometry>,
+    /// Where the profile came from (`bench` or the CSV path).
+    pub profile_source: String,
+}
+
+impl ProfileScenario {
+    /// Reads a scenario file; relative paths in it are resolved against its folder.
+    ///
+    /// # Errors
+    /// I/O errors, and TOML errors naming the file, the line and the key.
+    pub fn load(path: &Path) -> Result<ProfileScenario> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let mut s = ProfileScenario::from_toml_str(&text, &path.display().to_string())?;
+        s.base_dir = path.parent().map(Path::to_path_buf);
+        Ok(s)
+    }
+
+    /// Parses a scenario from TOML text; `source` names it in errors.
+    ///
+    /// # Errors
+    /// TOML errors (syntax, unknown keys, wrong types) located as `source:line`.
+    pub fn from_toml_str(text: &str, source: &str) -> Result<ProfileScenario> {
+        let mut s: ProfileScenario = toml::from_str(text).map_err(|e| {
+            let line = e.span().map(|sp| text[..sp.start.min(text.len())].matches('\n').count() + 1);
+            let location = line.map_or_else(|| source.to_string(), |l| format!("{source}:{l}"));
+            Error::format(
+                location,
+                e.message().trim().to_string(),
+                "check the key names and values against the profile scenario format (talus::lumped2d::scenario)",
+            )
+        })?;
+        s.source = Some(source.to_string());
+        Ok(s)
+    }
+
+    /// Checks everything and builds the slope, materials and release.
+    ///
+    /// # Errors
+    /// The first problem found, naming the field (e.g. `materials.floor.rn`, `release.x_m`).
+    pub fn resolve(&self) -> Result<ResolvedScenario> {
+        let (profile, bench, profile_source) = match &self.profile {
+            ProfileSource::Csv(p) => {
+                let path = match &self.base_dir {
+                    Some(d) if p.is_relative() => d.join(p),
+                    _ => p.clone(),
+                };
+                (Profile::from_csv_path(&path)?, None, path.display().to_string())
+            }
+            ProfileSource::Bench(g) => {
+                g.validate("profile.bench.")?;
+                (Profile::from_bench(g)?, Some(g.clone()), "bench".to_string())
+            }
+        };
+        let mut materials = BTreeMap::new();
+        for (name, spec) in &self.materials {
+            materials.insert(name.clone(), spec.resolve(&format!("materials.{name}"))?);
+        }
+        let slope = Slope2d::with_named_materials(profile, &materials)?;
+        let release = Release2d {
+            x_m: self.release.x_m,
+            height_m: self.release.height_m,
+            vx_mps: self.release.vx_mps,
+            vz_mps: self.release.vz_mps,
+            spin_radps: self.release.spin_radps,
+            mass_kg: self.mass_kg,
+        };
+        if !(self.mass_kg.is_finite() && self.mass_kg > 0.0) {
+            return Err(Error::invalid(
+                "mass_kg",
+                format!("must be a positive number of kilograms, got {}", self.mass_kg),
+                "give the rock mass in kg, e.g. mass_kg = 1000",
+            ));
+        }
+        release.validate(slope.profile(), "release.")?;
+        self.options.validate("options.")?;
+        if self.rocks == 0 {
+            return Err(Error::invalid("rocks", "must be at least 1", "e.g. rocks = 300"));
+        }
+        let (x0, x1) = slope.profile().x_range_m();
+        if !(self.envelope_spacing_m.is_finite() && self.envelope_spacing_m > 0.0) {
+            return Err(Error::invalid(
+                "envelope_spacing_m",
+                format!("must be a positive number of metres, got {}", self.envelope_spacing_m),
+                "e.g. envelope_spacing_m = 1.0",
+            ));
+        }
+        if (x1 - x0) / self.envelope_spacing_m > 1e6 {
+            return Err(Error::invalid(
+                "envelope_spacing_m",
+                format!("{} m gives more than a million stations on a {} m profile", self.envelope_spacing_m, x1 - x0),
+                "use a wider spacing",
+            ));
+        }
+        for (i, &x) in self.collectors_x_m.iter().enumerate() {
+            if !(x >= x0 && x <= x1) {
+                return Err(Error::invalid(
+                    format!("collectors_x_m[{i}]"),
+                    format!("{x} is outside the profile's x range [{x0}, {x1}]"),
+                    "place collectors on the profile",
+                ));
+            }
+        }
+        Ok(ResolvedScenario { slope, materials, release, options: self.options.clone(), bench, profile_source })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const EXAMPLE: &str = include_str!("../../examples/profile_bench.toml");
+
+    #[test]
+    fn example_scenario_resolves() {
+        let s = ProfileScenario::from_toml_str(EXAMPLE, "profile_bench.toml").unwrap();
+        let r = s.resolve().unwrap();
+        assert_eq!(r.slope.profile().material_names(), &["face".to_string(), "floor".to_string()]);
+        assert!(r.bench.is_some());
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_values_are_named() {
+        let bad = EXAMPLE.replace("seed = 42", "seed = 42\nsead = 1");
+        let e = ProfileScenario::from_toml_str(&bad, "s.toml").unwrap_err().to_string();
+        assert!(e.contains("sead") && e.contains("s.toml:"), "{e}");
+        let bad = EXAMPLE.replace("x_m = [10.0, 10.5]", "x_m = [10.0, 1000.5]");
+        let e = ProfileScenario::from_toml_str(&bad, "s.toml").unwrap().resolve().unwrap_err().to_string();
+        assert!(e.contains("release.x_m"), "{e}");
+        let bad = EXAMPLE.replace("[materials.floor]", "[materials.flor]");
+        let e = ProfileScenario::from_toml_str(&bad, "s.toml").unwrap().resolve().unwrap_err().to_string();
+        assert!(e.contains("materials.floor") && e.contains("flor"), "{e}");
+        let bad = EXAMPLE.replace("switch_speed_mps = 0.5", "switch_speed_mps = 0.5\nswitch_speed = 1");
+        let e = ProfileScenario::from_toml_str(&bad, "s.toml").unwrap_err().to_string();
+        assert!(e.contains("switch_speed"), "{e}");
+    }
+}
