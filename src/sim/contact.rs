@@ -9,8 +9,11 @@
 //! landing flat gets four equal impulses and no spin. Each contact gets:
 //! - a Newton restitution target u_n⁺ ≥ −Cr·u_n⁻ when its approach speed −u_n⁻ exceeds the bounce threshold, and
 //!   u_n⁺ ≥ 0 otherwise (resting or rolling contact);
-//! - Coulomb friction |P_t| ≤ μ·P_n aiming at zero slip, with μ = tan φ_static while the contact sticks (slip speed
-//!   below `stick_speed_mps` before the step) and tan φ_dynamic while it slips.
+//! - Coulomb friction with a stick test (physics.md §1.1, Stronge 2000): the contacts are first solved with the
+//!   static cone |P_t| ≤ tan φ_static·P_n; contacts whose friction saturates that cone and still slip are then
+//!   solved again with |P_t| = tan φ_dynamic·P_n opposite to their slip. Unlike a slip-speed threshold
+//!   (physics.md §8), this test does not depend on the time step: a block resting on a slope below φ_static stays
+//!   put whatever Δt is, and a sliding one is braked by φ_dynamic.
 //!
 //! Newton restitution with friction can create energy (physics.md §1.1), so the solution is checked: if the kinetic
 //! energy after the impulses exceeds that before, the step is solved again with Cr = 0, which cannot.
@@ -75,8 +78,6 @@ pub struct SolveReport {
 pub struct SolverSettings {
     /// Approach speed below which no bounce is applied, m/s.
     pub bounce_threshold_mps: f64,
-    /// Slip speed below which static friction applies, m/s.
-    pub stick_speed_mps: f64,
     /// Most sweeps.
     pub max_iterations: usize,
 }
@@ -100,8 +101,12 @@ struct Row {
     mt2: Vector3<f64>,
     k_nn: f64,
     k_tt: Matrix2<f64>,
-    k_tt_inv: Matrix2<f64>,
+    /// Step of the friction prox iteration, 1/λ_max(K_tt).
+    r_t: f64,
     target: f64,
+    mu_static: f64,
+    mu_dynamic: f64,
+    /// The friction coefficient in use: μ_s in the stick pass, μ_d for contacts found slipping.
     mu: f64,
     lambda_n: f64,
     lambda_t: Vector2<f64>,
@@ -134,19 +139,34 @@ pub fn solve(
             let (mn, mt1, mt2) = (jn.component_mul(&inv_i), jt1.component_mul(&inv_i), jt2.component_mul(&inv_i));
             let k_nn = inv_m + jn.dot(&mn);
             let k_tt = Matrix2::new(inv_m + jt1.dot(&mt1), jt1.dot(&mt2), jt2.dot(&mt1), inv_m + jt2.dot(&mt2));
-            let k_tt_inv = k_tt.try_inverse().unwrap_or_else(Matrix2::zeros);
+            // Largest eigenvalue of the symmetric 2×2 K_tt.
+            let (a, b, d) = (k_tt[(0, 0)], 0.5 * (k_tt[(0, 1)] + k_tt[(1, 0)]), k_tt[(1, 1)]);
+            let lambda_max = 0.5 * (a + d) + (0.25 * (a - d) * (a - d) + b * b).sqrt();
+            let r_t = 1.0 / lambda_max;
             let u = |v: &Velocities, d: &Vector3<f64>, j: &Vector3<f64>| v.linear_mps.dot(d) + v.angular_body_radps.dot(j);
             let un = u(before, &n, &jn);
-            let slip = Vector2::new(u(before, &t1, &jt1), u(before, &t2, &jt2)).norm();
             max_approach = max_approach.max(-un);
             let target = if -un > settings.bounce_threshold_mps { -c.cr * un } else { 0.0 };
-            let mu = if slip < settings.stick_speed_mps { c.mu_static } else { c.mu_dynamic };
             let (wn, wt) = c.warm;
             let lambda_t = Vector2::new(wt[0], wt[1]);
             let lambda_n = wn.max(0.0);
-            Row { n, t1, t2, jn, jt1, jt2, mn, mt1, mt2, k_nn, k_tt, k_tt_inv, target, mu, lambda_n, lambda_t }
+            Row { n, t1, t2, jn, jt1, jt2, mn, mt1, mt2, k_nn, k_tt, r_t, target, mu_static: c.mu_static, mu_dynamic: c.mu_dynamic, mu: c.mu_static, lambda_n, lambda_t }
     }));
-    let (mut after, iterations) = sweep(rows, free, inv_m, settings.max_iterations);
+    let (mut after, mut iterations) = sweep(rows, free, inv_m, settings.max_iterations);
+    // Contacts whose friction saturated the static cone and still slip: dynamic friction, solved again.
+    let mut slipping = false;
+    for r in rows.iter_mut() {
+        let slip = Vector2::new(after.linear_mps.dot(&r.t1) + after.angular_body_radps.dot(&r.jt1), after.linear_mps.dot(&r.t2) + after.angular_body_radps.dot(&r.jt2));
+        if r.mu_dynamic < r.mu_static && slip.norm() > SLIP_MPS && r.lambda_t.norm() >= r.mu_static * r.lambda_n * (1.0 - 1e-9) {
+            r.mu = r.mu_dynamic;
+            slipping = true;
+        }
+    }
+    if slipping {
+        let (again, it) = sweep(rows, free, inv_m, settings.max_iterations);
+        after = again;
+        iterations += it;
+    }
     let mut report = SolveReport { iterations, energy_guard: false, max_approach_mps: max_approach };
     let e_free = free.kinetic_energy_j(rock);
     if after.kinetic_energy_j(rock) > e_free * (1.0 + 1e-12) + 1e-12 {
@@ -165,6 +185,10 @@ pub fn solve(
     }
     (after, report)
 }
+
+/// Slip speed left by the static pass above which a saturated contact counts as slipping, m/s (ours): 1 mm/s, far
+/// above the solver's residual and below any slip that matters over a step.
+const SLIP_MPS: f64 = 1e-3;
 
 /// Velocity change below which the sweeps stop, m/s (ours): far below any velocity that matters to a rock's path.
 const CONVERGED_MPS: f64 = 1e-6;
@@ -191,23 +215,15 @@ fn sweep(rows: &mut [Row], free: &Velocities, inv_m: f64, max_iterations: usize)
             r.lambda_n = new_n;
             v += r.n * (dn * inv_m);
             w += r.mn * dn;
-            // Friction impulse: the sticking impulse if it lies in the disc |λ_t| ≤ μ λ_n, otherwise Coulomb sliding
-            // with the impulse opposite to the slip velocity that results (max dissipation, not a radial projection,
-            // which would skew the friction direction whenever rotation makes K_tt anisotropic).
+            // Friction impulse: a proximal step λ_t ← prox_{|λ_t| ≤ μ λ_n}(λ_t − r·u_t) with r = 1/λ_max(K_tt)
+            // (Leine et al. 2014, physics.md §1.2). Its fixed point is exact Coulomb friction: sticking inside the
+            // cone, or sliding with |λ_t| = μ λ_n opposite to the slip (maximal dissipation).
             let ut = Vector2::new(v.dot(&r.t1) + w.dot(&r.jt1), v.dot(&r.t2) + w.dot(&r.jt2));
-            let u0 = ut - r.k_tt * r.lambda_t;
-            let mut lt = -(r.k_tt_inv * u0);
+            let mut lt = r.lambda_t - ut * r.r_t;
             let cap = r.mu * r.lambda_n;
-            if lt.norm() > cap {
-                let mut dir = u0.try_normalize(1e-300).unwrap_or_else(|| -lt.normalize());
-                for _ in 0..4 {
-                    let slip = u0 - r.k_tt * dir * cap;
-                    match slip.try_normalize(1e-300) {
-                        Some(d) => dir = d,
-                        None => break,
-                    }
-                }
-                lt = -dir * cap;
+            let norm = lt.norm();
+            if norm > cap {
+                lt *= cap / norm;
             }
             let dt = lt - r.lambda_t;
             r.lambda_t = lt;

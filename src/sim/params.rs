@@ -26,8 +26,6 @@ pub struct SimParams {
     /// Normal approach speed below which a contact gets no bounce (restitution 0), m/s (default: 0.3; physics.md
     /// §8 gives 0.2–0.5).
     pub bounce_threshold_mps: f64,
-    /// Tangential contact speed below which static friction applies, m/s (default: 0.01, physics.md §8).
-    pub stick_speed_mps: f64,
     /// Rest test: speed of the centre of mass below this, m/s (default: 0.1, physics.md §8).
     pub stop_speed_mps: f64,
     /// Rest test: angular speed below this, rad/s (default: 0.2, physics.md §8).
@@ -48,11 +46,10 @@ pub struct SimParams {
 impl Default for SimParams {
     fn default() -> Self {
         SimParams {
-            dt_s: 0.001,
+            dt_s: 0.002,
             max_flight_step_s: 0.25,
             max_time_s: 120.0,
             bounce_threshold_mps: 0.3,
-            stick_speed_mps: 0.01,
             stop_speed_mps: 0.1,
             stop_spin_radps: 0.2,
             stop_duration_s: 0.5,
@@ -86,7 +83,6 @@ impl SimParams {
         pos("sample_spacing_m", self.sample_spacing_m, "use half the raster cell size or less")?;
         for (name, v) in [
             ("bounce_threshold_mps", self.bounce_threshold_mps),
-            ("stick_speed_mps", self.stick_speed_mps),
             ("penetration_slop_m", self.penetration_slop_m),
         ] {
             if !(v.is_finite() && v >= 0.0) {

@@ -191,7 +191,6 @@ impl<'a> Run<'a> {
         let cr = terrain.materials.iter().map(|m| m.cr.sample(rng)).collect();
         let settings = SolverSettings {
             bounce_threshold_mps: params.bounce_threshold_mps,
-            stick_speed_mps: params.stick_speed_mps,
             max_iterations: params.solver_iterations,
         };
         let out = Outcome {
