@@ -159,9 +159,22 @@ pub fn quantile_sorted(sorted: &[f64], q: f64) -> f64 {
     sorted[lo] + (h - lo as f64) * (sorted[hi] - sorted[lo])
 }
 
-/// Loads the terrain of a scenario.
+/// Loads the terrain of a scenario, with its barriers.
 pub fn load_terrain(sc: &Scenario) -> Result<Terrain> {
-    build_terrain(&sc.terrain_files, &sc.file.terrain, &sc.materials, &sc.path)
+    let mut terrain = build_terrain(&sc.terrain_files, &sc.file.terrain, &sc.materials, &sc.path)?;
+    terrain.barriers = sc
+        .file
+        .barriers
+        .iter()
+        .enumerate()
+        .map(|(i, b)| crate::sim::Barrier {
+            name: b.name.clone().unwrap_or_else(|| format!("barrier_{i}")),
+            line_m: b.line.iter().map(|p| crate::terrain::horizontal_to_local(terrain.up, &terrain.origin, *p)).collect(),
+            height_m: b.height_m,
+            capacity_j: b.capacity_kj * 1000.0,
+        })
+        .collect();
+    Ok(terrain)
 }
 
 /// Builds the run setup (terrain, sources, shapes) of a scenario with overrides applied.

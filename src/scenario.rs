@@ -59,6 +59,23 @@ pub struct ScenarioFile {
     /// Output settings.
     #[serde(default)]
     pub output: OutputSpec,
+    /// Barriers standing on the terrain.
+    #[serde(default)]
+    pub barriers: Vec<BarrierSpec>,
+}
+
+/// `[[barriers]]`: a flexible barrier (fence) in the simulation.
+#[derive(Debug, Clone, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BarrierSpec {
+    /// Name for outputs (default: `barrier_N`).
+    pub name: Option<String>,
+    /// Polyline vertices (x, y) in the terrain's horizontal frame.
+    pub line: Vec<[f64; 2]>,
+    /// Height above the ground, m.
+    pub height_m: f64,
+    /// Energy capacity, kJ.
+    pub capacity_kj: f64,
 }
 
 /// How materials are assigned to terrain triangles.
@@ -365,6 +382,19 @@ impl ScenarioFile {
                 return Err(Error::invalid(f(&format!("terrain.zones[{i}].material")), format!("'{}' is not defined", z.material), "define it under [materials]"));
             }
             check_polygon(&f(&format!("terrain.zones[{i}].polygon")), &z.polygon)?;
+        }
+        for (i, b) in self.barriers.iter().enumerate() {
+            let field = f(&format!("barriers[{i}]"));
+            if b.line.len() < 2 {
+                return Err(Error::invalid(format!("{field}.line"), format!("has {} vertices", b.line.len()), "give at least 2 [x, y] vertices"));
+            }
+            check_finite(&format!("{field}.line"), &b.line)?;
+            if !(b.height_m.is_finite() && b.height_m > 0.0) {
+                return Err(Error::invalid(format!("{field}.height_m"), format!("must be positive, got {}", b.height_m), "give the fence height in m, e.g. 4"));
+            }
+            if !(b.capacity_kj.is_finite() && b.capacity_kj > 0.0) {
+                return Err(Error::invalid(format!("{field}.capacity_kj"), format!("must be positive, got {}", b.capacity_kj), "give the energy class in kJ, e.g. 1000"));
+            }
         }
         if self.sources.is_empty() {
             return Err(Error::invalid(f("sources"), "no source is defined", "add a [[sources]] table"));

@@ -42,7 +42,7 @@ struct BenchArgs {
     #[arg(long, default_value_t = 5)]
     benches: usize,
     /// Lateral width of the 3D mesh, m.
-    #[arg(long, default_value_t = 60.0)]
+    #[arg(long, default_value_t = 100.0)]
     lateral_width_m: f64,
     /// Flat floor behind the top crest, m.
     #[arg(long, default_value_t = 10.0)]

@@ -37,8 +37,10 @@ pub struct Contact {
     pub warm: (f64, [f64; 2]),
     /// Ground triangle.
     pub triangle: u32,
-    /// Restitution coefficient for this contact.
+    /// Restitution coefficient for this contact (after the effects).
     pub cr: f64,
+    /// The coefficient as drawn from the material, before the effects (kept while the contact persists).
+    pub cr_drawn: f64,
     /// tan of the static friction angle.
     pub mu_static: f64,
     /// tan of the dynamic friction angle.

@@ -17,7 +17,8 @@ pub enum CrDraw {
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SimParams {
-    /// Time step while the rock is near or on the ground, s (default: 0.001; RAMMS uses 0.002, PlatRock 0.001).
+    /// Time step while the rock is near or on the ground, s (default: 0.002, as RAMMS; physics.md §6 gives 1–2 ms.
+    /// Halving it moves the median run-out of `examples/bench_stack.toml` by less than 2 %: see README.md).
     pub dt_s: f64,
     /// Longest exact ballistic step while the rock is clear of the ground, s (default: 0.25, ours).
     pub max_flight_step_s: f64,
@@ -41,6 +42,8 @@ pub struct SimParams {
     pub cr_draw: CrDraw,
     /// Horizontal spacing of the path samples that feed rasters and collectors, m (default: 0.5).
     pub sample_spacing_m: f64,
+    /// Optional effects (default: none).
+    pub effects: Effects,
 }
 
 impl Default for SimParams {
@@ -57,6 +60,7 @@ impl Default for SimParams {
             solver_iterations: 100,
             cr_draw: CrDraw::PerRock,
             sample_spacing_m: 0.5,
+            effects: Effects::default(),
         }
     }
 }
@@ -89,9 +93,83 @@ impl SimParams {
                 return Err(Error::invalid(format!("{prefix}{name}"), format!("must be 0 or more, got {v}"), "give a small non-negative number"));
             }
         }
+        self.effects.validate(&format!("{prefix}effects."))?;
         if self.solver_iterations == 0 {
             return Err(Error::invalid(format!("{prefix}solver_iterations"), "must be at least 1", "use for example 100"));
         }
         Ok(())
+    }
+}
+
+/// Effects the base 3DRB model lacks (physics.md §4), each off by default (`None`). The calibration loop switches
+/// them on one at a time when the residuals point at them.
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Effects {
+    /// Restitution falls with impact speed (Pfeiffer & Bowen 1989, physics.md §3–4): Cr' = Cr / (1 + (v_n/K)²),
+    /// with v_n the contact's normal approach speed and K this value, m/s (their K is 9.144 m/s).
+    pub speed_restitution_k_mps: Option<f64>,
+    /// Restitution depends on the impact angle θ between the incoming velocity and the ground (after Wyllie 2014,
+    /// e_n ∝ θ^−1.03): Cr' = min(1, Cr·(max(θ, 5°)/30°)^−a), with a this exponent (ours: the 30° reference).
+    pub angle_restitution_exponent: Option<f64>,
+    /// Restitution scales with mass (physics.md §8, f_m): Cr' = min(1, Cr·(m/m_ref)^−β), with β this exponent.
+    pub mass_restitution_exponent: Option<f64>,
+    /// Reference mass of `mass_restitution_exponent`, kg (default: 100).
+    pub mass_reference_kg: Option<f64>,
+    /// Ground roughness felt relative to rock size (PlatRock, physics.md §4): at each impact the contact normal
+    /// tilts by U(0, 1)·atan(rough/R) toward a random azimuth, R the equivalent radius; this value is `rough`, m.
+    pub roughness_m: Option<f64>,
+    /// Rolling resistance μ_r (Azzoni et al. 1995, physics.md §4): while in contact, the speed along the ground
+    /// drops by μ_r·g·cos α per second, and the spin by the same fraction (our discretisation).
+    pub rolling_resistance: Option<f64>,
+    /// Drag in soft ground: while in contact with one of `soft_materials` (all materials if empty), velocity and
+    /// spin decay as exp(−c·t) with c this rate, 1/s (a linear stand-in for RAMMS's scarring drag, ours).
+    pub soft_drag_per_s: Option<f64>,
+    /// Materials where `soft_drag_per_s` acts (default: all).
+    pub soft_materials: Vec<String>,
+}
+
+impl Effects {
+    /// True if no effect is on.
+    pub fn is_empty(&self) -> bool {
+        self.speed_restitution_k_mps.is_none()
+            && self.angle_restitution_exponent.is_none()
+            && self.mass_restitution_exponent.is_none()
+            && self.roughness_m.is_none()
+            && self.rolling_resistance.is_none()
+            && self.soft_drag_per_s.is_none()
+    }
+
+    /// Checks ranges; `prefix` is prepended to field names.
+    pub fn validate(&self, prefix: &str) -> Result<()> {
+        let check = |name: &str, v: Option<f64>, lo: f64, hi: f64| match v {
+            Some(v) if !(v.is_finite() && v >= lo && v <= hi) => {
+                Err(Error::invalid(format!("{prefix}{name}"), format!("must be in [{lo}, {hi}], got {v}"), "see the effect's documentation in README.md"))
+            }
+            _ => Ok(()),
+        };
+        check("speed_restitution_k_mps", self.speed_restitution_k_mps, 0.1, 1000.0)?;
+        check("angle_restitution_exponent", self.angle_restitution_exponent, -3.0, 3.0)?;
+        check("mass_restitution_exponent", self.mass_restitution_exponent, -2.0, 2.0)?;
+        check("mass_reference_kg", self.mass_reference_kg, 1e-3, 1e9)?;
+        check("roughness_m", self.roughness_m, 0.0, 100.0)?;
+        check("rolling_resistance", self.rolling_resistance, 0.0, 5.0)?;
+        check("soft_drag_per_s", self.soft_drag_per_s, 0.0, 1000.0)
+    }
+
+    /// The restitution coefficient after the restitution effects, for a contact approaching at `approach_mps`
+    /// with the rock's velocity at `angle_deg` to the ground, for a rock of `mass_kg`.
+    pub fn restitution(&self, cr: f64, approach_mps: f64, angle_deg: f64, mass_kg: f64) -> f64 {
+        let mut e = cr;
+        if let Some(k) = self.speed_restitution_k_mps {
+            e /= 1.0 + (approach_mps / k).powi(2);
+        }
+        if let Some(a) = self.angle_restitution_exponent {
+            e *= (angle_deg.max(5.0) / 30.0).powf(-a);
+        }
+        if let Some(b) = self.mass_restitution_exponent {
+            e *= (mass_kg / self.mass_reference_kg.unwrap_or(100.0)).powf(-b);
+        }
+        e.clamp(0.0, 1.0)
     }
 }

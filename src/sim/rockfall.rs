@@ -8,12 +8,17 @@
 //! physics.md §6), so nothing is tunnelled through however fast the rock goes.
 //!
 //! The loop ends with an explicit reason: `stopped` (speed and spin below the rest thresholds for the rest
-//! duration), `left_terrain` (no surface under the centre of mass), or `max_time`.
+//! duration), `left_terrain` (no surface under the centre of mass), `max_time`, or `barrier` (caught by a
+//! barrier, [`super::barrier`]).
+//!
+//! Optional effects ([`super::params::Effects`]) modify the restitution of each contact, tilt impact normals, and
+//! brake rocks in contact; all are off by default.
 
+use super::barrier::BarrierHit;
 use super::body::{free_rotation_step, rotate, RigidState};
 use super::contact::{solve, Contact, Scratch, SolverSettings, Velocities};
 use super::params::{CrDraw, SimParams};
-use crate::random::Rng;
+use crate::random::{uniform, Rng};
 use crate::rock::RockBody;
 use crate::terrain::Terrain;
 use nalgebra::{UnitQuaternion, Vector3};
@@ -31,6 +36,8 @@ pub enum StopReason {
     LeftTerrain,
     /// The simulated time limit was reached.
     MaxTime,
+    /// Caught by a barrier.
+    Barrier,
 }
 
 impl StopReason {
@@ -40,11 +47,12 @@ impl StopReason {
             StopReason::Stopped => "stopped",
             StopReason::LeftTerrain => "left_terrain",
             StopReason::MaxTime => "max_time",
+            StopReason::Barrier => "barrier",
         }
     }
 
     /// All reasons, in output order.
-    pub const ALL: [StopReason; 3] = [StopReason::Stopped, StopReason::LeftTerrain, StopReason::MaxTime];
+    pub const ALL: [StopReason; 4] = [StopReason::Stopped, StopReason::LeftTerrain, StopReason::MaxTime, StopReason::Barrier];
 }
 
 /// A point of the path, emitted about every `sample_spacing_m` of horizontal travel (and at least every 0.1 s).
@@ -102,6 +110,8 @@ pub trait Observer {
     fn sample(&mut self, _sample: &Sample) {}
     /// An impact.
     fn impact(&mut self, _impact: &Impact) {}
+    /// A barrier met.
+    fn barrier(&mut self, _hit: &BarrierHit) {}
 }
 
 impl Observer for () {}
@@ -115,6 +125,10 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
         self.0.impact(i);
         self.1.impact(i);
     }
+    fn barrier(&mut self, h: &BarrierHit) {
+        self.0.barrier(h);
+        self.1.barrier(h);
+    }
 }
 
 impl<O: Observer> Observer for Option<O> {
@@ -126,6 +140,11 @@ impl<O: Observer> Observer for Option<O> {
     fn impact(&mut self, i: &Impact) {
         if let Some(o) = self {
             o.impact(i)
+        }
+    }
+    fn barrier(&mut self, h: &BarrierHit) {
+        if let Some(o) = self {
+            o.barrier(h)
         }
     }
 }
@@ -174,12 +193,22 @@ struct Run<'a> {
     t: f64,
     cr: Vec<f64>,
     touching: Vec<bool>,
+    barrier_met: Vec<bool>,
+    soft: Vec<bool>,
     contacts: Vec<Contact>,
     previous: Vec<Contact>,
     scratch: Scratch,
     last_sample: Option<(Vector3<f64>, f64)>,
     out: Outcome,
     settings: SolverSettings,
+}
+
+/// What a barrier did to a rock in one move.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum BarrierEffect {
+    None,
+    Caught,
+    Slowed,
 }
 
 const GRAVITY: Vector3<f64> = Vector3::new(0.0, 0.0, -GRAVITY_MPS2);
@@ -213,6 +242,12 @@ impl<'a> Run<'a> {
             t: 0.0,
             cr,
             touching: vec![false; rock.vertices_m.len()],
+            barrier_met: vec![false; terrain.barriers.len()],
+            soft: terrain
+                .materials
+                .iter()
+                .map(|m| params.effects.soft_materials.is_empty() || params.effects.soft_materials.contains(&m.name))
+                .collect(),
             contacts: Vec::with_capacity(16),
             previous: Vec::with_capacity(16),
             scratch: Scratch::default(),
@@ -247,12 +282,18 @@ impl<'a> Run<'a> {
             }
             if h >= min_flight {
                 flight_h = h;
-                self.fly(h, observer);
                 rest_s = 0.0;
+                if self.fly(h, observer) {
+                    break StopReason::Barrier;
+                }
                 continue;
             }
             flight_h = min_flight;
+            let from = self.s.position_m;
             let in_contact = self.contact_step(observer);
+            if self.cross_barriers(from, observer) == BarrierEffect::Caught {
+                break StopReason::Barrier;
+            }
             self.emit(observer, in_contact, false);
             let v = self.s.velocity_mps.norm();
             let w = self.s.omega_body_radps.norm();
@@ -282,8 +323,9 @@ impl<'a> Run<'a> {
         x0.z.min(x1.z) - r > top
     }
 
-    /// Exact ballistic motion over `h`, with free rotation, emitting samples along the parabola.
-    fn fly(&mut self, h: f64, observer: &mut impl Observer) {
+    /// Exact ballistic motion over `h`, with free rotation, emitting samples along the parabola. Returns true if a
+    /// barrier caught the rock on the way.
+    fn fly(&mut self, h: f64, observer: &mut impl Observer) -> bool {
         let (x0, v0) = (self.s.position_m, self.s.velocity_mps);
         let horizontal = (v0.x * v0.x + v0.y * v0.y).sqrt() * h;
         let pieces = ((horizontal / self.params.sample_spacing_m).ceil() as usize).max((h / 0.1).ceil() as usize).max(1);
@@ -299,11 +341,66 @@ impl<'a> Run<'a> {
                 self.s.orientation = rotate(&self.s.orientation, &half, dt / sub as f64);
                 self.s.omega_body_radps = w1;
             }
+            let from = self.s.position_m;
             self.s.position_m = x0 + v0 * tk + GRAVITY * (0.5 * tk * tk);
             self.s.velocity_mps = v0 + GRAVITY * tk;
             self.t += dt;
+            match self.cross_barriers(from, observer) {
+                BarrierEffect::Caught => return true,
+                BarrierEffect::Slowed => {
+                    // The rest of this ballistic step no longer holds.
+                    self.emit(observer, false, true);
+                    return false;
+                }
+                BarrierEffect::None => {}
+            }
             self.emit(observer, false, true);
         }
+        false
+    }
+
+    /// Checks the move from `from` to the current position against the barriers not met yet. A barrier crossed
+    /// below its top catches the rock or slows it (see [`super::barrier`]).
+    fn cross_barriers(&mut self, from: Vector3<f64>, observer: &mut impl Observer) -> BarrierEffect {
+        if self.terrain.barriers.is_empty() {
+            return BarrierEffect::None;
+        }
+        let to = self.s.position_m;
+        let mut first: Option<(f64, usize)> = None;
+        for (k, b) in self.terrain.barriers.iter().enumerate() {
+            if self.barrier_met[k] {
+                continue;
+            }
+            if let Some(f) = b.crossing([from.x, from.y], [to.x, to.y]) {
+                if first.is_none_or(|(g, _)| f < g) {
+                    first = Some((f, k));
+                }
+            }
+        }
+        let Some((f, k)) = first else { return BarrierEffect::None };
+        self.barrier_met[k] = true;
+        let point = from + (to - from) * f;
+        let rot = self.s.orientation.to_rotation_matrix();
+        let lowest = self.rock.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min);
+        let ground = self.terrain.surface.height(point.x, point.y).unwrap_or(point.z);
+        let clearance = (point.z + lowest - ground).max(0.0);
+        let barrier = &self.terrain.barriers[k];
+        if clearance >= barrier.height_m {
+            return BarrierEffect::None;
+        }
+        let (_, kinetic) = self.kinetic(&self.s);
+        let caught = kinetic <= barrier.capacity_j;
+        observer.barrier(&BarrierHit { barrier: k, t_s: self.t, point_m: point, kinetic_j: kinetic, clearance_m: clearance, caught });
+        if caught {
+            self.s.position_m = point;
+            self.s.velocity_mps = Vector3::zeros();
+            self.s.omega_body_radps = Vector3::zeros();
+            return BarrierEffect::Caught;
+        }
+        let scale = ((kinetic - barrier.capacity_j) / kinetic).sqrt();
+        self.s.velocity_mps *= scale;
+        self.s.omega_body_radps *= scale;
+        BarrierEffect::Slowed
     }
 
     /// One Moreau midpoint step near the ground. Returns whether there was a contact.
@@ -359,6 +456,9 @@ impl<'a> Run<'a> {
         for c in &self.contacts {
             self.touching[c.vertex] = true;
         }
+        if in_contact {
+            self.brake(&mut after, h);
+        }
         self.s.velocity_mps = after.linear_mps;
         self.s.omega_body_radps = after.angular_body_radps;
         self.s.position_m = x_mid + after.linear_mps * (0.5 * h);
@@ -377,7 +477,34 @@ impl<'a> Run<'a> {
         in_contact
     }
 
-    /// Fills `self.contacts` with the hull vertices below the ground at the pose (x, q).
+    /// Rolling resistance and soft-ground drag (when on) on a rock in contact over a step of `h`.
+    fn brake(&self, vel: &mut Velocities, h: f64) {
+        let effects = &self.params.effects;
+        if let Some(mu_r) = effects.rolling_resistance {
+            let n = self.contacts.iter().fold(Vector3::zeros(), |a, c| a + c.normal).normalize();
+            let v = vel.linear_mps;
+            let along = v - n * v.dot(&n);
+            let speed = along.norm();
+            if speed > 0.0 {
+                let drop = (mu_r * GRAVITY_MPS2 * n.z.abs() * h).min(speed);
+                let f = 1.0 - drop / speed;
+                vel.linear_mps = v - along * (1.0 - f);
+                vel.angular_body_radps *= f;
+            }
+        }
+        if let Some(c) = effects.soft_drag_per_s {
+            let on_soft = self.contacts.iter().any(|k| self.soft[self.terrain.triangle_material[k.triangle as usize] as usize]);
+            if on_soft {
+                let f = (-c * h).exp();
+                vel.linear_mps *= f;
+                vel.angular_body_radps *= f;
+            }
+        }
+    }
+
+    /// Fills `self.contacts` with the hull vertices below the ground at the pose (x, q), each with its restitution
+    /// (drawn anew for a new contact when Cr is drawn per impact, then modified by the restitution effects) and, for
+    /// a new contact with the roughness effect on, a tilted normal.
     fn detect(&mut self, x: &Vector3<f64>, q: &UnitQuaternion<f64>) {
         self.contacts.clear();
         let surface = &self.terrain.surface;
@@ -387,33 +514,57 @@ impl<'a> Run<'a> {
             return;
         }
         let rot = q.to_rotation_matrix();
+        let effects = &self.params.effects;
+        let v = self.s.velocity_mps;
+        let w = self.s.orientation * self.s.omega_body_radps;
         for (i, b) in self.rock.vertices_m.iter().enumerate() {
             let p = x + rot * b;
             if p.z > top || p.z > surface.bin_max_height(p.x, p.y) {
                 continue;
             }
-            if let Some((depth, normal, triangle)) = surface.penetration(&p) {
-                let m = self.terrain.triangle_material[triangle as usize] as usize;
-                let (mu_static, mu_dynamic) = self.terrain.friction[m];
-                self.contacts.push(Contact {
-                    vertex: i,
-                    point_m: p,
-                    normal,
-                    depth_m: depth,
-                    warm: (0.0, [0.0; 2]),
-                    triangle,
-                    cr: self.cr[m],
-                    mu_static,
-                    mu_dynamic,
-                });
+            let Some((depth, mut normal, triangle)) = surface.penetration(&p) else { continue };
+            let m = self.terrain.triangle_material[triangle as usize] as usize;
+            let (mu_static, mu_dynamic) = self.terrain.friction[m];
+            let new = !self.touching[i];
+            let mut cr = self.cr[m];
+            if new && self.params.cr_draw == CrDraw::PerImpact {
+                cr = self.terrain.materials[m].cr.sample(self.rng);
+            } else if let Some(prev) = self.previous.iter().find(|c| c.vertex == i) {
+                cr = prev.cr_drawn;
             }
+            let cr_drawn = cr;
+            if new {
+                if let Some(rough) = effects.roughness_m {
+                    let tilt = uniform(self.rng) * (rough / self.rock.equivalent_radius_m()).atan();
+                    let azimuth = std::f64::consts::TAU * uniform(self.rng);
+                    let t1 = perpendicular(&normal);
+                    let t2 = normal.cross(&t1);
+                    normal = (normal * tilt.cos() + (t1 * azimuth.cos() + t2 * azimuth.sin()) * tilt.sin()).normalize();
+                }
+            }
+            let u = v + w.cross(&(rot * b));
+            let approach = (-u.dot(&normal)).max(0.0);
+            let speed = v.norm();
+            let angle = if speed > 0.0 { (-v.dot(&normal) / speed).clamp(-1.0, 1.0).asin().to_degrees() } else { 90.0 };
+            cr = effects.restitution(cr, approach, angle, self.rock.mass_kg);
+            self.contacts.push(Contact {
+                vertex: i,
+                point_m: p,
+                normal,
+                depth_m: depth,
+                warm: (0.0, [0.0; 2]),
+                triangle,
+                cr,
+                cr_drawn,
+                mu_static,
+                mu_dynamic,
+            });
         }
     }
 
     /// The fastest contact that was not touching in the previous step and approaches faster than the bounce
-    /// threshold, if any. With per-impact restitution, its material gets a new Cr draw (used from the next contact
-    /// on; this step uses the current one).
-    fn new_impact(&mut self, before: &Velocities, q: &UnitQuaternion<f64>) -> Option<Contact> {
+    /// threshold, if any.
+    fn new_impact(&self, before: &Velocities, q: &UnitQuaternion<f64>) -> Option<Contact> {
         let mut best: Option<(f64, Contact)> = None;
         for c in &self.contacts {
             if self.touching[c.vertex] {
@@ -426,12 +577,7 @@ impl<'a> Run<'a> {
                 best = Some((approach, *c));
             }
         }
-        let (_, c) = best?;
-        if self.params.cr_draw == CrDraw::PerImpact {
-            let m = self.terrain.triangle_material[c.triangle as usize] as usize;
-            self.cr[m] = self.terrain.materials[m].cr.sample(self.rng);
-        }
-        Some(c)
+        best.map(|(_, c)| c)
     }
 
     /// Emits a sample if the rock moved `sample_spacing_m` horizontally (or 0.1 s passed) since the last one, or
@@ -467,4 +613,10 @@ impl<'a> Run<'a> {
             in_contact,
         });
     }
+}
+
+/// A unit vector perpendicular to unit `n`.
+fn perpendicular(n: &Vector3<f64>) -> Vector3<f64> {
+    let a = if n.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
+    (a - n * n.dot(&a)).normalize()
 }

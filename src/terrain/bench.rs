@@ -22,7 +22,7 @@ pub struct BenchGeometry {
     pub crest_floor_m: f64,
     /// Width of the flat run-out floor after the last toe, m (default: 60).
     pub toe_floor_m: f64,
-    /// Lateral width of the 3D mesh (y extent), m (default: 60).
+    /// Lateral width of the 3D mesh (y extent), m (default: 100).
     pub lateral_width_m: f64,
     /// Largest triangle edge along x and y in the 3D mesh, m (default: 2.5).
     pub max_edge_m: f64,
@@ -37,7 +37,7 @@ impl Default for BenchGeometry {
             n_benches: 5,
             crest_floor_m: 10.0,
             toe_floor_m: 60.0,
-            lateral_width_m: 60.0,
+            lateral_width_m: 100.0,
             max_edge_m: 2.5,
         }
     }

@@ -64,6 +64,8 @@ pub struct Terrain {
     pub crs: Crs,
     /// What the surface builder kept and dropped.
     pub stats: SurfaceStats,
+    /// Barriers standing on the terrain (none by default).
+    pub barriers: Vec<crate::sim::Barrier>,
 }
 
 impl Terrain {
@@ -97,7 +99,17 @@ impl Terrain {
         })?;
         let triangle_material = kept.iter().map(|&i| triangle_material[i]).collect();
         let friction = materials.iter().map(|m| (m.mu_static(), m.mu_dynamic())).collect();
-        Ok(Terrain { surface, triangle_material, friction, materials, origin: Vector3::zeros(), up: UpAxis::Z, crs: Crs::default(), stats })
+        Ok(Terrain {
+            surface,
+            triangle_material,
+            friction,
+            materials,
+            origin: Vector3::zeros(),
+            up: UpAxis::Z,
+            crs: Crs::default(),
+            stats,
+            barriers: Vec::new(),
+        })
     }
 
     /// A square grid terrain over [0, size]² with `n` × `n` cells and heights `z(x, y)`, one material. For tests,
