@@ -71,8 +71,13 @@ struct Table {
 
 impl Table {
     fn read(path: &Path) -> Result<Table> {
-        let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).flexible(true).from_path(path).map_err(|e| csv_error(path, e))?;
-        let header: Vec<String> = rdr.headers().map_err(|e| csv_error(path, e))?.iter().map(|s| s.to_string()).collect();
+        let mut rdr = csv::ReaderBuilder::new()
+            .trim(csv::Trim::All)
+            .flexible(true)
+            .from_path(path)
+            .map_err(|e| csv_error(path, e))?;
+        let header: Vec<String> =
+            rdr.headers().map_err(|e| csv_error(path, e))?.iter().map(|s| s.to_string()).collect();
         let mut rows = Vec::new();
         for rec in rdr.records() {
             let rec = rec.map_err(|e| csv_error(path, e))?;
@@ -91,7 +96,12 @@ impl Table {
 
     fn need(&self, name: &str) -> Result<usize> {
         self.col(name).ok_or_else(|| {
-            Error::at_line(&self.path, 1, format!("the header has no column `{name}`"), format!("add a `{name}` column (see the campaign format in README.md)"))
+            Error::at_line(
+                &self.path,
+                1,
+                format!("the header has no column `{name}`"),
+                format!("add a `{name}` column (see the campaign format in README.md)"),
+            )
         })
     }
 
@@ -106,7 +116,12 @@ impl Table {
         let s = self.text(row, col, name)?;
         match s.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(Error::at_line(&self.path, row.0, format!("column `{name}` holds '{s}', not a finite number"), "write a plain number in SI units")),
+            _ => Err(Error::at_line(
+                &self.path,
+                row.0,
+                format!("column `{name}` holds '{s}', not a finite number"),
+                "write a plain number in SI units",
+            )),
         }
     }
 
@@ -121,7 +136,9 @@ impl Table {
 fn csv_error(path: &Path, e: csv::Error) -> Error {
     let line = e.position().map(|p| p.line() as usize);
     match (e.kind(), line) {
-        (csv::ErrorKind::Io(_), _) => Error::format(path.display().to_string(), e.to_string(), "check that the file exists and is readable"),
+        (csv::ErrorKind::Io(_), _) => {
+            Error::format(path.display().to_string(), e.to_string(), "check that the file exists and is readable")
+        }
         (_, Some(l)) => Error::at_line(path, l, e.to_string(), "fix the CSV syntax"),
         _ => Error::format(path.display().to_string(), e.to_string(), "fix the CSV syntax"),
     }
@@ -132,13 +149,19 @@ impl Campaign {
     /// `block_metadata.csv` from `dir`.
     pub fn read(dir: &Path) -> Result<Campaign> {
         let rel = Table::read(&dir.join("release_points.csv"))?;
-        let (id, x, y, z, b) = (rel.need("trajectory_id")?, rel.need("x_m")?, rel.need("y_m")?, rel.need("z_m")?, rel.need("block_id")?);
+        let (id, x, y, z, b) =
+            (rel.need("trajectory_id")?, rel.need("x_m")?, rel.need("y_m")?, rel.need("z_m")?, rel.need("block_id")?);
         let mut releases = Vec::new();
         let mut seen = std::collections::BTreeSet::new();
         for row in &rel.rows {
             let trajectory_id = rel.text(row, id, "trajectory_id")?;
             if !seen.insert(trajectory_id.clone()) {
-                return Err(Error::at_line(&rel.path, row.0, format!("trajectory_id '{trajectory_id}' appears twice"), "give every run its own id"));
+                return Err(Error::at_line(
+                    &rel.path,
+                    row.0,
+                    format!("trajectory_id '{trajectory_id}' appears twice"),
+                    "give every run its own id",
+                ));
             }
             let v = |n: &str| rel.optional_number(row, n).map(|v| v.unwrap_or(0.0));
             releases.push(Release {
@@ -150,7 +173,11 @@ impl Campaign {
             });
         }
         if releases.is_empty() {
-            return Err(Error::format(rel.path.display().to_string(), "holds no release", "add one row per released rock"));
+            return Err(Error::format(
+                rel.path.display().to_string(),
+                "holds no release",
+                "add one row per released rock",
+            ));
         }
         let blk = Table::read(&dir.join("block_metadata.csv"))?;
         let (bid, m) = (blk.need("block_id")?, blk.need("mass_kg")?);
@@ -161,11 +188,20 @@ impl Campaign {
                 block_id: blk.text(row, bid, "block_id")?,
                 name: blk.col("name").and_then(|c| row.1.get(c).cloned()).unwrap_or_default(),
                 mass_kg: blk.number(row, m, "mass_kg")?,
-                size_m: [blk.number(row, sx, "size_x_m")?, blk.number(row, sy, "size_y_m")?, blk.number(row, sz, "size_z_m")?],
+                size_m: [
+                    blk.number(row, sx, "size_x_m")?,
+                    blk.number(row, sy, "size_y_m")?,
+                    blk.number(row, sz, "size_z_m")?,
+                ],
                 shape: blk.col("shape").and_then(|c| row.1.get(c).cloned()).unwrap_or_default(),
             };
             if block.mass_kg <= 0.0 || block.size_m.iter().any(|&s| s <= 0.0) {
-                return Err(Error::at_line(&blk.path, row.0, "mass and sizes must be positive", "fix the block's mass_kg and size_*_m"));
+                return Err(Error::at_line(
+                    &blk.path,
+                    row.0,
+                    "mass and sizes must be positive",
+                    "fix the block's mass_kg and size_*_m",
+                ));
             }
             blocks.insert(block.block_id.clone(), block);
         }
@@ -173,7 +209,10 @@ impl Campaign {
             if !blocks.contains_key(&r.block_id) {
                 return Err(Error::format(
                     rel.path.display().to_string(),
-                    format!("run '{}' uses block '{}', which block_metadata.csv does not list", r.trajectory_id, r.block_id),
+                    format!(
+                        "run '{}' uses block '{}', which block_metadata.csv does not list",
+                        r.trajectory_id, r.block_id
+                    ),
                     "add the block to block_metadata.csv or fix the block_id",
                 ));
             }
@@ -186,7 +225,12 @@ impl Campaign {
             for row in &dep.rows {
                 let tid = dep.text(row, id, "trajectory_id")?;
                 let Some(rel) = releases.iter().find(|r| r.trajectory_id == tid) else {
-                    return Err(Error::at_line(&dep.path, row.0, format!("run '{tid}' has no release in release_points.csv"), "fix the trajectory_id"));
+                    return Err(Error::at_line(
+                        &dep.path,
+                        row.0,
+                        format!("run '{tid}' has no release in release_points.csv"),
+                        "fix the trajectory_id",
+                    ));
                 };
                 let p = [dep.number(row, x, "x_m")?, dep.number(row, y, "y_m")?, dep.number(row, z, "z_m")?];
                 let computed = ((p[0] - rel.position_m[0]).powi(2) + (p[1] - rel.position_m[1]).powi(2)).sqrt();

@@ -71,7 +71,9 @@ impl Setup {
         };
         for s in &sc.shapes {
             let kind = match s {
-                ShapeRef::Builtin(name) => ShapeKind::builtin(name).ok_or_else(|| Error::invalid(&field, format!("unknown shape {name}"), "use cube, flat_box or smartie"))?,
+                ShapeRef::Builtin(name) => ShapeKind::builtin(name).ok_or_else(|| {
+                    Error::invalid(&field, format!("unknown shape {name}"), "use cube, flat_box or smartie")
+                })?,
                 ShapeRef::Hull(path) => ShapeKind::Hull {
                     name: path.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "hull".into()),
                     points: crate::io::points::read_hull_points(path)?,
@@ -106,7 +108,9 @@ impl Setup {
                 let shape = &self.shapes[((shape_draw * self.shapes.len() as f64) as usize).min(self.shapes.len() - 1)];
                 match self.mass {
                     Some(MassSpec::One(m)) => shape.with_mass(m),
-                    Some(MassSpec::Range([lo, hi])) => shape.with_mass((lo.ln() + mass_draw * (hi.ln() - lo.ln())).exp()),
+                    Some(MassSpec::Range([lo, hi])) => {
+                        shape.with_mass((lo.ln() + mass_draw * (hi.ln() - lo.ln())).exp())
+                    }
                     None => shape.clone(),
                 }
             }

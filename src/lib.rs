@@ -8,9 +8,9 @@
 //! Physics choices cite `physics.md` (shipped with the project's shared docs) or a paper, or are marked as ours.
 #![warn(missing_docs)]
 
-pub mod error;
 pub mod campaign;
 pub mod ensemble;
+pub mod error;
 pub mod hazard;
 pub mod io;
 pub mod lumped2d;

@@ -169,7 +169,11 @@ pub fn load_terrain(sc: &Scenario) -> Result<Terrain> {
         .enumerate()
         .map(|(i, b)| crate::sim::Barrier {
             name: b.name.clone().unwrap_or_else(|| format!("barrier_{i}")),
-            line_m: b.line.iter().map(|p| crate::terrain::horizontal_to_local(terrain.up, &terrain.origin, *p)).collect(),
+            line_m: b
+                .line
+                .iter()
+                .map(|p| crate::terrain::horizontal_to_local(terrain.up, &terrain.origin, *p))
+                .collect(),
             height_m: b.height_m,
             capacity_j: b.capacity_kj * 1000.0,
         })
@@ -206,7 +210,12 @@ pub const RASTERS: [(&str, &str); 6] = [
 ];
 
 /// Runs a scenario and writes its outputs into `out_dir`. `progress` is called with the number of rocks done.
-pub fn run_scenario(sc: &Scenario, overrides: &RunOverrides, out_dir: &Path, progress: &dyn Fn(usize, usize)) -> Result<RunSummary> {
+pub fn run_scenario(
+    sc: &Scenario,
+    overrides: &RunOverrides,
+    out_dir: &Path,
+    progress: &dyn Fn(usize, usize),
+) -> Result<RunSummary> {
     let t0 = Instant::now();
     let setup = setup(sc, overrides)?;
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
@@ -231,7 +240,8 @@ pub fn run_scenario(sc: &Scenario, overrides: &RunOverrides, out_dir: &Path, pro
     let mut stopped_xy = Vec::new();
     let mut paths: Vec<(usize, Vec<Sample>)> = Vec::new();
     let mut reasons: BTreeMap<String, usize> = StopReason::ALL.iter().map(|r| (r.as_str().to_string(), 0)).collect();
-    let (mut runouts, mut times, mut energies, mut bounces) = (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
+    let (mut runouts, mut times, mut energies, mut bounces) =
+        (Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n), Vec::with_capacity(n));
     let (mut guards, mut contact_steps, mut sweeps) = (0u64, 0u64, 0u64);
     let mut write_error = None;
     crate::parallel::map_in_order(
@@ -297,7 +307,14 @@ pub fn run_scenario(sc: &Scenario, overrides: &RunOverrides, out_dir: &Path, pro
     drop(csv);
 
     let mut outputs = vec!["endpoints.csv".to_string()];
-    let grids = hazard_grids(&acc, terrain, &stopped_xy, n, bandwidth, &sc.file.terrain.crs_epsg.map(crate::raster::Crs::epsg).unwrap_or_else(|| terrain.crs.clone()));
+    let grids = hazard_grids(
+        &acc,
+        terrain,
+        &stopped_xy,
+        n,
+        bandwidth,
+        &sc.file.terrain.crs_epsg.map(crate::raster::Crs::epsg).unwrap_or_else(|| terrain.crs.clone()),
+    );
     for ((stem, _), grid) in RASTERS.iter().zip(&grids) {
         let name = format!("{stem}.tif");
         crate::io::geotiff::write_grid(&out_dir.join(&name), grid)?;
@@ -336,7 +353,14 @@ pub fn run_scenario(sc: &Scenario, overrides: &RunOverrides, out_dir: &Path, pro
             up: terrain.up,
             crs_epsg: grids[0].crs.epsg,
         },
-        raster: RasterFacts { cell_size_m: cell, ncols: frame.ncols, nrows: frame.nrows, x_min_m: frame.x_min_m, y_max_m: frame.y_max_m, endpoint_bandwidth_m: bandwidth },
+        raster: RasterFacts {
+            cell_size_m: cell,
+            ncols: frame.ncols,
+            nrows: frame.nrows,
+            x_min_m: frame.x_min_m,
+            y_max_m: frame.y_max_m,
+            endpoint_bandwidth_m: bandwidth,
+        },
         stop_reasons: reasons,
         runout_m: Stats::of(&mut runouts),
         travel_time_s: Stats::of(&mut times),
@@ -352,24 +376,32 @@ pub fn run_scenario(sc: &Scenario, overrides: &RunOverrides, out_dir: &Path, pro
             outputs
         },
     };
-    let json = serde_json::to_string_pretty(&summary).map_err(|e| Error::invalid("summary.json", e.to_string(), "report this as a bug"))?;
+    let json = serde_json::to_string_pretty(&summary)
+        .map_err(|e| Error::invalid("summary.json", e.to_string(), "report this as a bug"))?;
     crate::io::write_bytes_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
     Ok(summary)
 }
 
 /// The six hazard rasters (in [`RASTERS`] order). Cells off the terrain are nodata; on the terrain, probabilities
 /// are 0 where nothing came, energies and heights nodata where no rock passed.
-pub fn hazard_grids(acc: &HazardAccumulator, terrain: &Terrain, stopped_xy: &[[f64; 2]], n_rocks: usize, bandwidth_m: f64, crs: &crate::raster::Crs) -> Vec<Grid> {
+pub fn hazard_grids(
+    acc: &HazardAccumulator,
+    terrain: &Terrain,
+    stopped_xy: &[[f64; 2]],
+    n_rocks: usize,
+    bandwidth_m: f64,
+    crs: &crate::raster::Crs,
+) -> Vec<Grid> {
     let frame = &acc.frame;
     let density = endpoint_density(frame, stopped_xy, n_rocks, bandwidth_m);
     let mut grids: Vec<Grid> = (0..RASTERS.len()).map(|_| frame.empty_grid()).collect();
-    for k in 0..frame.len() {
+    for (k, &dens) in density.iter().enumerate() {
         let (x, y) = frame.local_centre(k);
         if terrain.surface.at(x, y).is_none() {
             continue;
         }
         let values = [
-            density[k],
+            dens,
             acc.reach_count(k) as f64 / n_rocks.max(1) as f64,
             acc.kinetic_quantile_j(k, 0.95) / 1000.0,
             acc.kinetic_max_j(k) / 1000.0,
@@ -412,7 +444,18 @@ fn write_paths(out_dir: &Path, terrain: &Terrain, paths: &[(usize, Vec<Sample>)]
         for (id, samples) in paths {
             for s in samples {
                 let p = terrain.to_file_frame(&s.position_m);
-                writeln!(w, "{id},{:.4},{:.3},{:.3},{:.3},{:.3},{:.1},{:.3}", s.t_s, p[0], p[1], p[2], s.velocity_mps.norm(), s.kinetic_j, s.clearance_m).map_err(err)?;
+                writeln!(
+                    w,
+                    "{id},{:.4},{:.3},{:.3},{:.3},{:.3},{:.1},{:.3}",
+                    s.t_s,
+                    p[0],
+                    p[1],
+                    p[2],
+                    s.velocity_mps.norm(),
+                    s.kinetic_j,
+                    s.clearance_m
+                )
+                .map_err(err)?;
             }
         }
         Ok(())
@@ -421,7 +464,8 @@ fn write_paths(out_dir: &Path, terrain: &Terrain, paths: &[(usize, Vec<Sample>)]
     crate::io::write_atomic(&vtk_path, |w| {
         let err = |e| Error::io(&vtk_path, e);
         let total: usize = paths.iter().map(|(_, s)| s.len()).sum();
-        writeln!(w, "# vtk DataFile Version 3.0\ntalus rock paths\nASCII\nDATASET POLYDATA\nPOINTS {total} double").map_err(err)?;
+        writeln!(w, "# vtk DataFile Version 3.0\ntalus rock paths\nASCII\nDATASET POLYDATA\nPOINTS {total} double")
+            .map_err(err)?;
         for (_, samples) in paths {
             for s in samples {
                 let p = terrain.to_file_frame(&s.position_m);

@@ -344,10 +344,18 @@ impl ScenarioFile {
             }
         }
         if !(self.terrain.slope_face_deg > 0.0 && self.terrain.slope_face_deg < 90.0) {
-            return Err(Error::invalid(f("terrain.slope_face_deg"), format!("must be in (0, 90), got {}", self.terrain.slope_face_deg), "use e.g. 45"));
+            return Err(Error::invalid(
+                f("terrain.slope_face_deg"),
+                format!("must be in (0, 90), got {}", self.terrain.slope_face_deg),
+                "use e.g. 45",
+            ));
         }
         if self.materials.is_empty() {
-            return Err(Error::invalid(f("materials"), "no material is defined", "add e.g. [materials.default] with preset = \"face_all\""));
+            return Err(Error::invalid(
+                f("materials"),
+                "no material is defined",
+                "add e.g. [materials.default] with preset = \"face_all\"",
+            ));
         }
         let mut materials = Vec::new();
         for (name, spec) in &self.materials {
@@ -359,14 +367,21 @@ impl ScenarioFile {
                 return Err(Error::invalid(
                     f(&format!("terrain.material_names.{from}")),
                     format!("names material '{to}', which is not defined"),
-                    format!("define [materials.{to}] or use one of: {}", self.materials.keys().cloned().collect::<Vec<_>>().join(", ")),
+                    format!(
+                        "define [materials.{to}] or use one of: {}",
+                        self.materials.keys().cloned().collect::<Vec<_>>().join(", ")
+                    ),
                 ));
             }
         }
         if self.terrain.materials_by == MaterialsBy::Slope {
             for m in ["face", "floor"] {
                 if !known(m) {
-                    return Err(Error::invalid(f("materials"), format!("materials_by = \"slope\" needs a material named '{m}'"), format!("add [materials.{m}]")));
+                    return Err(Error::invalid(
+                        f("materials"),
+                        format!("materials_by = \"slope\" needs a material named '{m}'"),
+                        format!("add [materials.{m}]"),
+                    ));
                 }
             }
         }
@@ -379,21 +394,37 @@ impl ScenarioFile {
         }
         for (i, z) in self.terrain.zones.iter().enumerate() {
             if !known(&z.material) {
-                return Err(Error::invalid(f(&format!("terrain.zones[{i}].material")), format!("'{}' is not defined", z.material), "define it under [materials]"));
+                return Err(Error::invalid(
+                    f(&format!("terrain.zones[{i}].material")),
+                    format!("'{}' is not defined", z.material),
+                    "define it under [materials]",
+                ));
             }
             check_polygon(&f(&format!("terrain.zones[{i}].polygon")), &z.polygon)?;
         }
         for (i, b) in self.barriers.iter().enumerate() {
             let field = f(&format!("barriers[{i}]"));
             if b.line.len() < 2 {
-                return Err(Error::invalid(format!("{field}.line"), format!("has {} vertices", b.line.len()), "give at least 2 [x, y] vertices"));
+                return Err(Error::invalid(
+                    format!("{field}.line"),
+                    format!("has {} vertices", b.line.len()),
+                    "give at least 2 [x, y] vertices",
+                ));
             }
             check_finite(&format!("{field}.line"), &b.line)?;
             if !(b.height_m.is_finite() && b.height_m > 0.0) {
-                return Err(Error::invalid(format!("{field}.height_m"), format!("must be positive, got {}", b.height_m), "give the fence height in m, e.g. 4"));
+                return Err(Error::invalid(
+                    format!("{field}.height_m"),
+                    format!("must be positive, got {}", b.height_m),
+                    "give the fence height in m, e.g. 4",
+                ));
             }
             if !(b.capacity_kj.is_finite() && b.capacity_kj > 0.0) {
-                return Err(Error::invalid(format!("{field}.capacity_kj"), format!("must be positive, got {}", b.capacity_kj), "give the energy class in kJ, e.g. 1000"));
+                return Err(Error::invalid(
+                    format!("{field}.capacity_kj"),
+                    format!("must be positive, got {}", b.capacity_kj),
+                    "give the energy class in kJ, e.g. 1000",
+                ));
             }
         }
         if self.sources.is_empty() {
@@ -418,21 +449,35 @@ impl ScenarioFile {
         let shapes = match &this.rocks {
             Some(r) => r.check(&f("rocks"), base)?,
             None if this.sources.iter().all(|s| s.kind == SourceKind::Campaign) => Vec::new(),
-            None => return Err(Error::invalid(f("rocks"), "is missing", "add a [rocks] table with shapes and mass_kg")),
+            None => {
+                return Err(Error::invalid(f("rocks"), "is missing", "add a [rocks] table with shapes and mass_kg"))
+            }
         };
         this.simulation.params.validate(&f("simulation."))?;
         if this.simulation.rocks == Some(0) {
             return Err(Error::invalid(f("simulation.rocks"), "is 0", "give at least 1 rock"));
         }
         if this.simulation.threads == Some(0) {
-            return Err(Error::invalid(f("simulation.threads"), "is 0", "give at least 1 thread, or leave it out to use all cores"));
+            return Err(Error::invalid(
+                f("simulation.threads"),
+                "is 0",
+                "give at least 1 thread, or leave it out to use all cores",
+            ));
         }
         if !(this.output.cell_size_m.is_finite() && this.output.cell_size_m > 0.0) {
-            return Err(Error::invalid(f("output.cell_size_m"), format!("must be positive, got {}", this.output.cell_size_m), "use e.g. 2"));
+            return Err(Error::invalid(
+                f("output.cell_size_m"),
+                format!("must be positive, got {}", this.output.cell_size_m),
+                "use e.g. 2",
+            ));
         }
         if let Some(b) = this.output.endpoint_bandwidth_m {
             if !(b.is_finite() && b > 0.0) {
-                return Err(Error::invalid(f("output.endpoint_bandwidth_m"), format!("must be positive, got {b}"), "use about 2 cell sizes"));
+                return Err(Error::invalid(
+                    f("output.endpoint_bandwidth_m"),
+                    format!("must be positive, got {b}"),
+                    "use about 2 cell sizes",
+                ));
             }
         }
         Ok(Scenario { path: path.to_path_buf(), file: this, terrain_files, materials, shapes })
@@ -445,11 +490,21 @@ impl MaterialSpec {
         let mut m = match &self.preset {
             Some(p) => Material::preset(p).ok_or_else(|| {
                 let names: Vec<&str> = crate::terrain::material::TABLE2_PRESETS.iter().map(|p| p.0).collect();
-                Error::invalid(format!("{field}.preset"), format!("unknown preset '{p}'"), format!("use one of: {}", names.join(", ")))
+                Error::invalid(
+                    format!("{field}.preset"),
+                    format!("unknown preset '{p}'"),
+                    format!("use one of: {}", names.join(", ")),
+                )
             })?,
             None => {
                 let need = |v: Option<f64>, k: &str| {
-                    v.ok_or_else(|| Error::invalid(format!("{field}.{k}"), "is missing", "give it, or use a preset (e.g. preset = \"face_all\")"))
+                    v.ok_or_else(|| {
+                        Error::invalid(
+                            format!("{field}.{k}"),
+                            "is missing",
+                            "give it, or use a preset (e.g. preset = \"face_all\")",
+                        )
+                    })
                 };
                 let mean = need(self.cr_mean, "cr_mean")?;
                 Material {
@@ -500,10 +555,18 @@ impl SourceSpec {
         let n = self.points.len();
         match self.kind {
             SourceKind::Point if n != 1 => {
-                return Err(Error::invalid(format!("{field}.points"), format!("a point source needs 1 point, got {n}"), "give points = [[x, y]]"))
+                return Err(Error::invalid(
+                    format!("{field}.points"),
+                    format!("a point source needs 1 point, got {n}"),
+                    "give points = [[x, y]]",
+                ))
             }
             SourceKind::Polyline if n < 2 => {
-                return Err(Error::invalid(format!("{field}.points"), format!("a polyline needs at least 2 points, got {n}"), "give points = [[x1, y1], [x2, y2], ...]"))
+                return Err(Error::invalid(
+                    format!("{field}.points"),
+                    format!("a polyline needs at least 2 points, got {n}"),
+                    "give points = [[x1, y1], [x2, y2], ...]",
+                ))
             }
             SourceKind::Polygon => check_polygon(&format!("{field}.points"), &self.points)?,
             _ => {}
@@ -514,12 +577,20 @@ impl SourceSpec {
         }
         if let Some(m) = &self.material {
             if !known(m) {
-                return Err(Error::invalid(format!("{field}.material"), format!("'{m}' is not defined"), "name a material defined under [materials]"));
+                return Err(Error::invalid(
+                    format!("{field}.material"),
+                    format!("'{m}' is not defined"),
+                    "name a material defined under [materials]",
+                ));
             }
         }
         if self.kind == SourceKind::Campaign {
             if self.campaign.is_none() {
-                return Err(Error::invalid(format!("{field}.campaign"), "is missing", "give the campaign folder, e.g. campaign = \"../meshes/tschamut2014\""));
+                return Err(Error::invalid(
+                    format!("{field}.campaign"),
+                    "is missing",
+                    "give the campaign folder, e.g. campaign = \"../meshes/tschamut2014\"",
+                ));
             }
             if self.repeats == Some(0) {
                 return Err(Error::invalid(format!("{field}.repeats"), "is 0", "give at least 1 rock per release"));
@@ -527,40 +598,72 @@ impl SourceSpec {
             return Ok(());
         }
         match (self.count, self.density_per_m2) {
-            (Some(_), Some(_)) => return Err(Error::invalid(field, "has both count and density_per_m2", "keep one of them")),
-            (None, None) => return Err(Error::invalid(field, "has neither count nor density_per_m2", "give count = N (or density_per_m2 for polygon and scatter sources)")),
+            (Some(_), Some(_)) => {
+                return Err(Error::invalid(field, "has both count and density_per_m2", "keep one of them"))
+            }
+            (None, None) => {
+                return Err(Error::invalid(
+                    field,
+                    "has neither count nor density_per_m2",
+                    "give count = N (or density_per_m2 for polygon and scatter sources)",
+                ))
+            }
             (None, Some(d)) => {
                 if !matches!(self.kind, SourceKind::Polygon | SourceKind::Scatter) {
-                    return Err(Error::invalid(format!("{field}.density_per_m2"), "only applies to polygon and scatter sources", "use count"));
+                    return Err(Error::invalid(
+                        format!("{field}.density_per_m2"),
+                        "only applies to polygon and scatter sources",
+                        "use count",
+                    ));
                 }
                 if !(d.is_finite() && d > 0.0) {
-                    return Err(Error::invalid(format!("{field}.density_per_m2"), format!("must be positive, got {d}"), "give rocks per m², e.g. 0.01"));
+                    return Err(Error::invalid(
+                        format!("{field}.density_per_m2"),
+                        format!("must be positive, got {d}"),
+                        "give rocks per m², e.g. 0.01",
+                    ));
                 }
             }
             (Some(_), None) => {}
         }
         if !(self.height_m.is_finite() && self.height_m >= 0.0) {
-            return Err(Error::invalid(format!("{field}.height_m"), format!("must be 0 or more, got {}", self.height_m), "give the release gap in m, e.g. 0.1"));
+            return Err(Error::invalid(
+                format!("{field}.height_m"),
+                format!("must be 0 or more, got {}", self.height_m),
+                "give the release gap in m, e.g. 0.1",
+            ));
         }
         if self.velocity_mps.is_some() && self.speed_mps.is_some() {
             return Err(Error::invalid(field, "has both velocity_mps and speed_mps", "keep one of them"));
         }
         if let Some(v) = self.velocity_mps {
             if !v.iter().all(|x| x.is_finite()) {
-                return Err(Error::invalid(format!("{field}.velocity_mps"), "is not finite", "give [vx, vy, vz] in m/s"));
+                return Err(Error::invalid(
+                    format!("{field}.velocity_mps"),
+                    "is not finite",
+                    "give [vx, vy, vz] in m/s",
+                ));
             }
         }
         for (k, r) in [("speed_mps", self.speed_mps), ("spin_radps", self.spin_radps)] {
             if let Some([a, b]) = r {
                 if !(a.is_finite() && b.is_finite() && 0.0 <= a && a <= b) {
-                    return Err(Error::invalid(format!("{field}.{k}"), format!("[{a}, {b}] is not a range of non-negative values"), "give [min, max] with 0 <= min <= max"));
+                    return Err(Error::invalid(
+                        format!("{field}.{k}"),
+                        format!("[{a}, {b}] is not a range of non-negative values"),
+                        "give [min, max] with 0 <= min <= max",
+                    ));
                 }
             }
         }
         for (k, v) in [("min_slope_deg", self.min_slope_deg), ("max_slope_deg", self.max_slope_deg)] {
             if let Some(v) = v {
                 if !(0.0..=90.0).contains(&v) {
-                    return Err(Error::invalid(format!("{field}.{k}"), format!("must be in [0, 90], got {v}"), "give a slope in degrees"));
+                    return Err(Error::invalid(
+                        format!("{field}.{k}"),
+                        format!("must be in [0, 90], got {v}"),
+                        "give a slope in degrees",
+                    ));
                 }
             }
         }
@@ -571,7 +674,11 @@ impl SourceSpec {
 impl RockSpec {
     fn check(&self, field: &str, base: &Path) -> Result<Vec<ShapeRef>> {
         if self.shapes.is_empty() {
-            return Err(Error::invalid(format!("{field}.shapes"), "is empty", "list shapes, e.g. [\"cube\", \"flat_box\", \"smartie\"]"));
+            return Err(Error::invalid(
+                format!("{field}.shapes"),
+                "is empty",
+                "list shapes, e.g. [\"cube\", \"flat_box\", \"smartie\"]",
+            ));
         }
         let mut out = Vec::new();
         for (i, s) in self.shapes.iter().enumerate() {
@@ -593,21 +700,39 @@ impl RockSpec {
             if v.is_finite() && v > 0.0 {
                 Ok(())
             } else {
-                Err(Error::invalid(format!("{field}.{k}"), format!("must be positive, got {v}"), "give a positive value"))
+                Err(Error::invalid(
+                    format!("{field}.{k}"),
+                    format!("must be positive, got {v}"),
+                    "give a positive value",
+                ))
             }
         };
         positive("density_kg_m3", self.density_kg_m3)?;
         match (self.mass_kg, self.dimensions_m) {
             (Some(MassSpec::Range(_)), Some(_)) => {
-                return Err(Error::invalid(field, "has a mass range together with dimensions_m", "give dimensions_m with one mass_kg (or none, to use the density), or a mass range alone"))
+                return Err(Error::invalid(
+                    field,
+                    "has a mass range together with dimensions_m",
+                    "give dimensions_m with one mass_kg (or none, to use the density), or a mass range alone",
+                ))
             }
-            (None, None) => return Err(Error::invalid(field, "has neither mass_kg nor dimensions_m", "give mass_kg = 1000 (or [100, 10000]), or dimensions_m = [a, b, c]")),
+            (None, None) => {
+                return Err(Error::invalid(
+                    field,
+                    "has neither mass_kg nor dimensions_m",
+                    "give mass_kg = 1000 (or [100, 10000]), or dimensions_m = [a, b, c]",
+                ))
+            }
             (Some(MassSpec::One(m)), _) => positive("mass_kg", m)?,
             (Some(MassSpec::Range([a, b])), _) => {
                 positive("mass_kg", a)?;
                 positive("mass_kg", b)?;
                 if a > b {
-                    return Err(Error::invalid(format!("{field}.mass_kg"), format!("range [{a}, {b}] is reversed"), "give [min, max]"));
+                    return Err(Error::invalid(
+                        format!("{field}.mass_kg"),
+                        format!("range [{a}, {b}] is reversed"),
+                        "give [min, max]",
+                    ));
                 }
             }
             (None, Some(d)) => {

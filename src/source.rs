@@ -8,8 +8,8 @@ use crate::random::{uniform, uniform_in, Rng};
 use crate::rock::{random_orientation, RockBody};
 use crate::scenario::{SourceKind, SourceSpec};
 use crate::sim::RigidState;
-use crate::terrain::{horizontal_to_local, point_in_polygon};
 use crate::terrain::Terrain;
+use crate::terrain::{horizontal_to_local, point_in_polygon};
 use nalgebra::Vector3;
 
 #[derive(Debug, Clone)]
@@ -50,7 +50,10 @@ impl Sources {
         for (i, spec) in specs.iter().enumerate() {
             let f = format!("{field}[{i}]");
             if spec.kind == SourceKind::Campaign {
-                let dir = spec.campaign.as_deref().ok_or_else(|| Error::invalid(format!("{f}.campaign"), "is missing", "give the campaign folder"))?;
+                let dir = spec
+                    .campaign
+                    .as_deref()
+                    .ok_or_else(|| Error::invalid(format!("{f}.campaign"), "is missing", "give the campaign folder"))?;
                 let campaign = crate::campaign::Campaign::read(dir)?;
                 for r in &campaign.releases {
                     let body = campaign.body(&campaign.blocks[&r.block_id])?;
@@ -93,15 +96,20 @@ impl Sources {
                     } else {
                         let mut cum = vec![0.0];
                         for w in pts.windows(2) {
-                            cum.push(cum.last().copied().unwrap_or(0.0) + ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt());
+                            cum.push(
+                                cum.last().copied().unwrap_or(0.0)
+                                    + ((w[1][0] - w[0][0]).powi(2) + (w[1][1] - w[0][1]).powi(2)).sqrt(),
+                            );
                         }
                         (Geometry::Polyline { pts, cum }, 0.0)
                     }
                 }
                 SourceKind::Polygon => {
-                    let bbox = pts.iter().fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, p| {
-                        [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
-                    });
+                    let bbox = pts
+                        .iter()
+                        .fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, p| {
+                            [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
+                        });
                     // Area over the terrain, by a fixed 64 × 64 lattice over the bounding box.
                     let mut covered = 0usize;
                     for a in 0..64 {
@@ -136,7 +144,10 @@ impl Sources {
                             }
                         }
                         let slope = terrain.surface.slope_deg(t);
-                        if spec.min_slope_deg.is_some_and(|s| slope < s) || spec.max_slope_deg.is_some_and(|s| slope > s) || slope >= 89.999 {
+                        if spec.min_slope_deg.is_some_and(|s| slope < s)
+                            || spec.max_slope_deg.is_some_and(|s| slope > s)
+                            || slope >= 89.999
+                        {
                             continue;
                         }
                         let [a, b, c] = terrain.surface.corners(t);
@@ -178,7 +189,11 @@ impl Sources {
             rescale(&mut sources, n);
         }
         if sources.iter().map(|s| s.count).sum::<usize>() == 0 {
-            return Err(Error::invalid(field, "the sources release no rock", "give count = N on a source, or --rocks N"));
+            return Err(Error::invalid(
+                field,
+                "the sources release no rock",
+                "give count = N on a source, or --rocks N",
+            ));
         }
         Ok(Sources { sources })
     }
@@ -207,7 +222,12 @@ impl Sources {
             // A measured release: the centre of mass where it was, lifted only if the random orientation buries a
             // vertex.
             let orientation = random_orientation(rng);
-            let mut state = RigidState { position_m: p, velocity_mps: v, orientation, omega_body_radps: orientation.inverse_transform_vector(&w) };
+            let mut state = RigidState {
+                position_m: p,
+                velocity_mps: v,
+                orientation,
+                omega_body_radps: orientation.inverse_transform_vector(&w),
+            };
             let mut lifted = state;
             place_above_ground(terrain, rock, &mut lifted, 0.0);
             state.position_m.z = state.position_m.z.max(lifted.position_m.z);
@@ -217,7 +237,12 @@ impl Sources {
         let orientation = random_orientation(rng);
         let ground = terrain.surface.at(x, y);
         let z0 = ground.map(|g| g.z_m).unwrap_or(0.0);
-        let mut state = RigidState { position_m: Vector3::new(x, y, z0), velocity_mps: Vector3::zeros(), orientation, omega_body_radps: Vector3::zeros() };
+        let mut state = RigidState {
+            position_m: Vector3::new(x, y, z0),
+            velocity_mps: Vector3::zeros(),
+            orientation,
+            omega_body_radps: Vector3::zeros(),
+        };
         place_above_ground(terrain, rock, &mut state, src.spec.height_m);
         if let Some(v) = src.spec.velocity_mps {
             state.velocity_mps = Vector3::new(v[0], v[1], v[2]);
@@ -276,7 +301,8 @@ impl Source {
 /// Largest-remainder rescaling of source counts to `n` rocks in all (proportional to the counts as given).
 fn rescale(sources: &mut [Source], n: usize) {
     let given: usize = sources.iter().map(|s| s.count).sum();
-    let weights: Vec<f64> = if given == 0 { vec![1.0; sources.len()] } else { sources.iter().map(|s| s.count as f64).collect() };
+    let weights: Vec<f64> =
+        if given == 0 { vec![1.0; sources.len()] } else { sources.iter().map(|s| s.count as f64).collect() };
     let wsum: f64 = weights.iter().sum();
     let exact: Vec<f64> = weights.iter().map(|w| w / wsum * n as f64).collect();
     let mut counts: Vec<usize> = exact.iter().map(|e| e.floor() as usize).collect();
@@ -309,7 +335,8 @@ pub fn place_above_ground(terrain: &Terrain, rock: &RockBody, state: &mut RigidS
     let c = state.position_m;
     for b in &rock.vertices_m {
         let p = rot * b;
-        let ground = terrain.surface.height(c.x + p.x, c.y + p.y).or_else(|| terrain.surface.height(c.x, c.y)).unwrap_or(c.z);
+        let ground =
+            terrain.surface.height(c.x + p.x, c.y + p.y).or_else(|| terrain.surface.height(c.x, c.y)).unwrap_or(c.z);
         lift = lift.max(ground + gap_m - p.z);
     }
     state.position_m.z = lift;

@@ -8,7 +8,12 @@ use talus::sim::{simulate, Impact, Observer, RigidState, Sample, SimParams, Stop
 use talus::terrain::{Material, Terrain};
 
 fn material(cr: f64, static_deg: f64, dynamic_deg: f64) -> Material {
-    Material { name: "m".into(), cr: TruncNormal::fixed(cr), static_friction_deg: static_deg, dynamic_friction_deg: dynamic_deg }
+    Material {
+        name: "m".into(),
+        cr: TruncNormal::fixed(cr),
+        static_friction_deg: static_deg,
+        dynamic_friction_deg: dynamic_deg,
+    }
 }
 
 fn rock(kind: ShapeKind, mass_kg: f64) -> RockBody {
@@ -75,7 +80,8 @@ fn cube_dropped_flat_rebounds_with_cr_times_impact_speed_and_no_spin() {
     let v_in = (2.0 * GRAVITY_MPS2 * drop_m).sqrt();
     assert_relative_eq!(first.approach_speed_mps, v_in, max_relative = 0.01);
     // After the impact and before the next one: a free rise whose apex gives the rebound speed.
-    let rising = rec.samples.iter().find(|s| s.t_s > first.t_s && !s.in_contact && s.velocity_mps.z > 0.0).expect("rising");
+    let rising =
+        rec.samples.iter().find(|s| s.t_s > first.t_s && !s.in_contact && s.velocity_mps.z > 0.0).expect("rising");
     let v_out = (rising.velocity_mps.z.powi(2) + 2.0 * GRAVITY_MPS2 * rising.clearance_m).sqrt();
     let apex_clearance = rising.clearance_m + rising.velocity_mps.z.powi(2) / (2.0 * GRAVITY_MPS2);
     assert_relative_eq!(v_out, cr * v_in, max_relative = 0.01);
@@ -111,7 +117,11 @@ fn resting_on_incline(r: &RockBody, slope_deg: f64, x: f64, speed_mps: f64) -> R
     // Rotation taking body min_axis to the slope normal and max_axis downslope.
     let third = normal.cross(&down);
     let world = nalgebra::Matrix3::from_columns(&[down, third, normal]);
-    let body = nalgebra::Matrix3::from_columns(&[axis(max_axis), axis(max_axis).cross(&axis(min_axis)) * -1.0, axis(min_axis)]);
+    let body = nalgebra::Matrix3::from_columns(&[
+        axis(max_axis),
+        axis(max_axis).cross(&axis(min_axis)) * -1.0,
+        axis(min_axis),
+    ]);
     let rot = nalgebra::Rotation3::from_matrix_unchecked(world * body.transpose());
     let q = UnitQuaternion::from_rotation_matrix(&rot);
     let ground = (200.0 - x) * th.tan();
@@ -152,7 +162,9 @@ fn block_on_an_incline_below_its_static_friction_angle_stays_put() {
 /// A rough slope: 35° mean with bumps, falling toward +x.
 fn rough_slope(m: Material) -> Terrain {
     Terrain::from_function(200.0, 80, m, |x, y| {
-        (200.0 - x) * 35f64.to_radians().tan() + 1.5 * (0.31 * x).sin() * (0.23 * y).cos() + 0.7 * (1.1 * x + 0.4 * y).sin()
+        (200.0 - x) * 35f64.to_radians().tan()
+            + 1.5 * (0.31 * x).sin() * (0.23 * y).cos()
+            + 0.7 * (1.1 * x + 0.4 * y).sin()
     })
     .unwrap()
 }
@@ -171,18 +183,28 @@ impl Observer for EnergyCheck {
 
 #[test]
 fn no_impact_adds_energy_and_no_rock_ends_below_the_surface() {
-    let m = Material { name: "m".into(), cr: TruncNormal { mean: 0.6, sd: 0.3, min: 0.0, max: 1.0 }, static_friction_deg: 35.0, dynamic_friction_deg: 30.0 };
+    let m = Material {
+        name: "m".into(),
+        cr: TruncNormal { mean: 0.6, sd: 0.3, min: 0.0, max: 1.0 },
+        static_friction_deg: 35.0,
+        dynamic_friction_deg: 30.0,
+    };
     let terrain = rough_slope(m);
     let params = SimParams { cr_draw: talus::sim::CrDraw::PerImpact, max_time_s: 30.0, ..Default::default() };
     let shapes = [ShapeKind::Cube, ShapeKind::FlatBox, ShapeKind::Smartie];
     let mut total_impacts = 0;
     for i in 0..12u64 {
         let mut rng = stream(5, i);
-        let r = rock(shapes[i as usize % 3].clone(), [50.0, 800.0, 5000.0][i as usize % 3 / 1 % 3]);
+        let r = rock(shapes[i as usize % 3].clone(), [50.0, 800.0, 5000.0][(i as usize / 3) % 3]);
         let q = talus::rock::random_orientation(&mut rng);
         let x = 20.0 + 3.0 * i as f64;
         let z = terrain.surface.height(x, 100.0).unwrap() + r.bounding_radius_m + 0.5;
-        let start = RigidState { position_m: Vector3::new(x, 100.0, z), velocity_mps: Vector3::new(2.0, 0.0, 0.0), orientation: q, omega_body_radps: Vector3::zeros() };
+        let start = RigidState {
+            position_m: Vector3::new(x, 100.0, z),
+            velocity_mps: Vector3::new(2.0, 0.0, 0.0),
+            orientation: q,
+            omega_body_radps: Vector3::zeros(),
+        };
         let mut check = EnergyCheck { impacts: 0, worst_gain: 0.0 };
         let out = simulate(&terrain, &r, start, &params, &mut rng, &mut check);
         assert!(check.worst_gain <= 1e-9, "rock {i}: an impact added {:.3e} of the energy", check.worst_gain);
@@ -229,7 +251,19 @@ fn no_tunnelling_through_a_thin_wall_at_40_mps() {
             orientation: UnitQuaternion::from_euler_angles(0.4, 0.1, 0.7),
             omega_body_radps: Vector3::new(0.0, 10.0, 0.0),
         };
-        let out = simulate(&terrain, &r, start, &SimParams { max_time_s: 10.0, ..Default::default() }, &mut stream(1, 0), &mut ());
-        assert!(out.final_state.position_m.x < 30.0, "{} went through the wall: {:?}", r.shape, out.final_state.position_m);
+        let out = simulate(
+            &terrain,
+            &r,
+            start,
+            &SimParams { max_time_s: 10.0, ..Default::default() },
+            &mut stream(1, 0),
+            &mut (),
+        );
+        assert!(
+            out.final_state.position_m.x < 30.0,
+            "{} went through the wall: {:?}",
+            r.shape,
+            out.final_state.position_m
+        );
     }
 }

@@ -48,7 +48,8 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         }
         pb.set_position(done as u64);
     };
-    let summary = run_scenario(&sc, &overrides, &a.out, &progress).with_context(|| format!("running {}", a.scenario.display()))?;
+    let summary = run_scenario(&sc, &overrides, &a.out, &progress)
+        .with_context(|| format!("running {}", a.scenario.display()))?;
     pb.finish_and_clear();
     println!(
         "{} rocks in {:.1} s ({:.0} rocks/s): {} stopped, {} left the terrain, {} hit the time limit",

@@ -12,5 +12,10 @@ pub fn random_orientation(rng: &mut Rng) -> UnitQuaternion<f64> {
     let (u1, u2, u3) = (uniform(rng), uniform(rng), uniform(rng));
     let (a, b) = ((1.0 - u1).sqrt(), u1.sqrt());
     let tau = std::f64::consts::TAU;
-    UnitQuaternion::from_quaternion(Quaternion::new(b * (tau * u3).cos(), a * (tau * u2).sin(), a * (tau * u2).cos(), b * (tau * u3).sin()))
+    UnitQuaternion::from_quaternion(Quaternion::new(
+        b * (tau * u3).cos(),
+        a * (tau * u2).sin(),
+        a * (tau * u2).cos(),
+        b * (tau * u3).sin(),
+    ))
 }

@@ -85,12 +85,17 @@ fn box_points(a: f64, b: f64, c: f64) -> Vec<Point3<f64>> {
 /// ellipsoid x²/r² + y²/r² + z²/h² = 1), rings twisted by half a step.
 fn smartie_points(radius: f64, half_thickness: f64) -> Vec<Point3<f64>> {
     let mut out = Vec::with_capacity(30);
-    let rings: [(f64, usize, f64); 5] = [(0.0, 10, 0.0), (45.0, 7, 0.5), (-45.0, 7, 0.25), (75.0, 3, 0.0), (-75.0, 3, 0.5)];
+    let rings: [(f64, usize, f64); 5] =
+        [(0.0, 10, 0.0), (45.0, 7, 0.5), (-45.0, 7, 0.25), (75.0, 3, 0.0), (-75.0, 3, 0.5)];
     for (lat_deg, n, twist) in rings {
         let lat = lat_deg.to_radians();
         for k in 0..n {
             let lon = std::f64::consts::TAU * (k as f64 + twist) / n as f64;
-            out.push(Point3::new(radius * lat.cos() * lon.cos(), radius * lat.cos() * lon.sin(), half_thickness * lat.sin()));
+            out.push(Point3::new(
+                radius * lat.cos() * lon.cos(),
+                radius * lat.cos() * lon.sin(),
+                half_thickness * lat.sin(),
+            ));
         }
     }
     out
@@ -173,7 +178,11 @@ impl RockBody {
             RockSize::Mass { .. } => unit,
         };
         let (hull_pts, hull_tris) = parry3d_f64::transformation::try_convex_hull(&points).map_err(|e| {
-            Error::invalid(field, format!("the points of shape '{}' have no convex hull: {e:?}", kind.name()), "give points that span a volume")
+            Error::invalid(
+                field,
+                format!("the points of shape '{}' have no convex hull: {e:?}", kind.name()),
+                "give points that span a volume",
+            )
         })?;
         let mp = MassProperties::from_convex_polyhedron(1.0, &hull_pts, &hull_tris);
         let unit_volume = mp.mass();
@@ -258,10 +267,31 @@ fn sorted_axes(ext: &Vector3<f64>) -> [usize; 3] {
 fn check_positive(field: &str, name: &str, values: &[f64]) -> Result<()> {
     for &v in values {
         if !(v.is_finite() && v > 0.0) {
-            return Err(Error::invalid(format!("{field}.{name}"), format!("must be positive, got {v}"), "give a value above 0"));
+            return Err(Error::invalid(
+                format!("{field}.{name}"),
+                format!("must be positive, got {v}"),
+                "give a value above 0",
+            ));
         }
     }
     Ok(())
+}
+
+impl RockBody {
+    /// The same shape and density scaled to `mass_kg`.
+    pub fn with_mass(&self, mass_kg: f64) -> RockBody {
+        let s = (mass_kg / self.mass_kg).cbrt();
+        RockBody {
+            shape: self.shape.clone(),
+            mass_kg,
+            inertia_kg_m2: self.inertia_kg_m2 * s.powi(5),
+            vertices_m: self.vertices_m.iter().map(|v| v * s).collect(),
+            faces: self.faces.iter().map(|(n, d)| (*n, d * s)).collect(),
+            bounding_radius_m: self.bounding_radius_m * s,
+            volume_m3: self.volume_m3 * s.powi(3),
+            extents_m: self.extents_m.map(|e| e * s),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -271,7 +301,8 @@ mod tests {
 
     #[test]
     fn cube_mass_properties_are_exact() {
-        let r = RockBody::new(&ShapeKind::Cube, RockSize::Mass { mass_kg: 2650.0, density_kg_m3: 2650.0 }, "rock").unwrap();
+        let r =
+            RockBody::new(&ShapeKind::Cube, RockSize::Mass { mass_kg: 2650.0, density_kg_m3: 2650.0 }, "rock").unwrap();
         assert_relative_eq!(r.mass_kg, 2650.0, max_relative = 1e-12);
         assert_relative_eq!(r.volume_m3, 1.0, max_relative = 1e-12);
         for i in 0..3 {
@@ -300,7 +331,8 @@ mod tests {
 
     #[test]
     fn smartie_is_an_oblate_lens_with_few_dozen_vertices() {
-        let r = RockBody::new(&ShapeKind::Smartie, RockSize::Mass { mass_kg: 1000.0, density_kg_m3: 2650.0 }, "rock").unwrap();
+        let r = RockBody::new(&ShapeKind::Smartie, RockSize::Mass { mass_kg: 1000.0, density_kg_m3: 2650.0 }, "rock")
+            .unwrap();
         assert_eq!(r.vertices_m.len(), 30);
         assert_relative_eq!(r.mass_kg, 1000.0, max_relative = 1e-9);
         // Oblate: one large principal moment (about the symmetry axis), two nearly equal smaller ones.
@@ -322,26 +354,13 @@ mod tests {
 
     #[test]
     fn bad_sizes_are_errors() {
-        let e = RockBody::new(&ShapeKind::Cube, RockSize::Mass { mass_kg: -5.0, density_kg_m3: 2650.0 }, "rocks").unwrap_err();
+        let e = RockBody::new(&ShapeKind::Cube, RockSize::Mass { mass_kg: -5.0, density_kg_m3: 2650.0 }, "rocks")
+            .unwrap_err();
         assert!(e.to_string().contains("rocks.mass_kg"), "{e}");
-        let flat = ShapeKind::Hull { name: "flat".into(), points: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]] };
+        let flat = ShapeKind::Hull {
+            name: "flat".into(),
+            points: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]],
+        };
         assert!(RockBody::new(&flat, RockSize::Mass { mass_kg: 1.0, density_kg_m3: 2650.0 }, "rocks").is_err());
-    }
-}
-
-impl RockBody {
-    /// The same shape and density scaled to `mass_kg`.
-    pub fn with_mass(&self, mass_kg: f64) -> RockBody {
-        let s = (mass_kg / self.mass_kg).cbrt();
-        RockBody {
-            shape: self.shape.clone(),
-            mass_kg,
-            inertia_kg_m2: self.inertia_kg_m2 * s.powi(5),
-            vertices_m: self.vertices_m.iter().map(|v| v * s).collect(),
-            faces: self.faces.iter().map(|(n, d)| (*n, d * s)).collect(),
-            bounding_radius_m: self.bounding_radius_m * s,
-            volume_m3: self.volume_m3 * s.powi(3),
-            extents_m: self.extents_m.map(|e| e * s),
-        }
     }
 }

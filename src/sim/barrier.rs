@@ -73,7 +73,12 @@ mod tests {
 
     #[test]
     fn crossings() {
-        let b = Barrier { name: "b".into(), line_m: vec![[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]], height_m: 3.0, capacity_j: 1e5 };
+        let b = Barrier {
+            name: "b".into(),
+            line_m: vec![[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]],
+            height_m: 3.0,
+            capacity_j: 1e5,
+        };
         assert_eq!(b.crossing([5.0, -1.0], [5.0, 1.0]), Some(0.5));
         assert_eq!(b.crossing([5.0, 1.0], [5.0, 2.0]), None);
         let s = b.crossing([9.0, 5.0], [13.0, 5.0]).unwrap();

@@ -132,34 +132,59 @@ pub fn solve(
     let rows = &mut scratch.0;
     rows.clear();
     rows.extend(contacts.iter().map(|c| {
-            let n = c.normal;
-            let t1 = any_perpendicular(&n);
-            let t2 = n.cross(&t1);
-            let b = rock.vertices_m[c.vertex];
-            let to_body = |d: &Vector3<f64>| q.inverse_transform_vector(d);
-            let (jn, jt1, jt2) = (b.cross(&to_body(&n)), b.cross(&to_body(&t1)), b.cross(&to_body(&t2)));
-            let (mn, mt1, mt2) = (jn.component_mul(&inv_i), jt1.component_mul(&inv_i), jt2.component_mul(&inv_i));
-            let k_nn = inv_m + jn.dot(&mn);
-            let k_tt = Matrix2::new(inv_m + jt1.dot(&mt1), jt1.dot(&mt2), jt2.dot(&mt1), inv_m + jt2.dot(&mt2));
-            // Largest eigenvalue of the symmetric 2×2 K_tt.
-            let (a, b, d) = (k_tt[(0, 0)], 0.5 * (k_tt[(0, 1)] + k_tt[(1, 0)]), k_tt[(1, 1)]);
-            let lambda_max = 0.5 * (a + d) + (0.25 * (a - d) * (a - d) + b * b).sqrt();
-            let r_t = 1.0 / lambda_max;
-            let u = |v: &Velocities, d: &Vector3<f64>, j: &Vector3<f64>| v.linear_mps.dot(d) + v.angular_body_radps.dot(j);
-            let un = u(before, &n, &jn);
-            max_approach = max_approach.max(-un);
-            let target = if -un > settings.bounce_threshold_mps { -c.cr * un } else { 0.0 };
-            let (wn, wt) = c.warm;
-            let lambda_t = Vector2::new(wt[0], wt[1]);
-            let lambda_n = wn.max(0.0);
-            Row { n, t1, t2, jn, jt1, jt2, mn, mt1, mt2, k_nn, k_tt, r_t, target, mu_static: c.mu_static, mu_dynamic: c.mu_dynamic, mu: c.mu_static, lambda_n, lambda_t }
+        let n = c.normal;
+        let t1 = any_perpendicular(&n);
+        let t2 = n.cross(&t1);
+        let b = rock.vertices_m[c.vertex];
+        let to_body = |d: &Vector3<f64>| q.inverse_transform_vector(d);
+        let (jn, jt1, jt2) = (b.cross(&to_body(&n)), b.cross(&to_body(&t1)), b.cross(&to_body(&t2)));
+        let (mn, mt1, mt2) = (jn.component_mul(&inv_i), jt1.component_mul(&inv_i), jt2.component_mul(&inv_i));
+        let k_nn = inv_m + jn.dot(&mn);
+        let k_tt = Matrix2::new(inv_m + jt1.dot(&mt1), jt1.dot(&mt2), jt2.dot(&mt1), inv_m + jt2.dot(&mt2));
+        // Largest eigenvalue of the symmetric 2×2 K_tt.
+        let (a, b, d) = (k_tt[(0, 0)], 0.5 * (k_tt[(0, 1)] + k_tt[(1, 0)]), k_tt[(1, 1)]);
+        let lambda_max = 0.5 * (a + d) + (0.25 * (a - d) * (a - d) + b * b).sqrt();
+        let r_t = 1.0 / lambda_max;
+        let u = |v: &Velocities, d: &Vector3<f64>, j: &Vector3<f64>| v.linear_mps.dot(d) + v.angular_body_radps.dot(j);
+        let un = u(before, &n, &jn);
+        max_approach = max_approach.max(-un);
+        let target = if -un > settings.bounce_threshold_mps { -c.cr * un } else { 0.0 };
+        let (wn, wt) = c.warm;
+        let lambda_t = Vector2::new(wt[0], wt[1]);
+        let lambda_n = wn.max(0.0);
+        Row {
+            n,
+            t1,
+            t2,
+            jn,
+            jt1,
+            jt2,
+            mn,
+            mt1,
+            mt2,
+            k_nn,
+            k_tt,
+            r_t,
+            target,
+            mu_static: c.mu_static,
+            mu_dynamic: c.mu_dynamic,
+            mu: c.mu_static,
+            lambda_n,
+            lambda_t,
+        }
     }));
     let (mut after, mut iterations) = sweep(rows, free, inv_m, settings.max_iterations);
     // Contacts whose friction saturated the static cone and still slip: dynamic friction, solved again.
     let mut slipping = false;
     for r in rows.iter_mut() {
-        let slip = Vector2::new(after.linear_mps.dot(&r.t1) + after.angular_body_radps.dot(&r.jt1), after.linear_mps.dot(&r.t2) + after.angular_body_radps.dot(&r.jt2));
-        if r.mu_dynamic < r.mu_static && slip.norm() > SLIP_MPS && r.lambda_t.norm() >= r.mu_static * r.lambda_n * (1.0 - 1e-9) {
+        let slip = Vector2::new(
+            after.linear_mps.dot(&r.t1) + after.angular_body_radps.dot(&r.jt1),
+            after.linear_mps.dot(&r.t2) + after.angular_body_radps.dot(&r.jt2),
+        );
+        if r.mu_dynamic < r.mu_static
+            && slip.norm() > SLIP_MPS
+            && r.lambda_t.norm() >= r.mu_static * r.lambda_n * (1.0 - 1e-9)
+        {
             r.mu = r.mu_dynamic;
             slipping = true;
         }

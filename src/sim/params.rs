@@ -77,7 +77,11 @@ impl SimParams {
         };
         pos("dt_s", self.dt_s, "use a step of 0.0005 to 0.002 s")?;
         if self.dt_s > 0.01 {
-            return Err(Error::invalid(format!("{prefix}dt_s"), format!("{} s is too coarse for contact", self.dt_s), "use 0.0005 to 0.002 s"));
+            return Err(Error::invalid(
+                format!("{prefix}dt_s"),
+                format!("{} s is too coarse for contact", self.dt_s),
+                "use 0.0005 to 0.002 s",
+            ));
         }
         pos("max_flight_step_s", self.max_flight_step_s, "use about 0.25 s")?;
         pos("max_time_s", self.max_time_s, "use for example 120 s")?;
@@ -85,17 +89,24 @@ impl SimParams {
         pos("stop_spin_radps", self.stop_spin_radps, "use about 0.2 rad/s")?;
         pos("stop_duration_s", self.stop_duration_s, "use about 0.5 s")?;
         pos("sample_spacing_m", self.sample_spacing_m, "use half the raster cell size or less")?;
-        for (name, v) in [
-            ("bounce_threshold_mps", self.bounce_threshold_mps),
-            ("penetration_slop_m", self.penetration_slop_m),
-        ] {
+        for (name, v) in
+            [("bounce_threshold_mps", self.bounce_threshold_mps), ("penetration_slop_m", self.penetration_slop_m)]
+        {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::invalid(format!("{prefix}{name}"), format!("must be 0 or more, got {v}"), "give a small non-negative number"));
+                return Err(Error::invalid(
+                    format!("{prefix}{name}"),
+                    format!("must be 0 or more, got {v}"),
+                    "give a small non-negative number",
+                ));
             }
         }
         self.effects.validate(&format!("{prefix}effects."))?;
         if self.solver_iterations == 0 {
-            return Err(Error::invalid(format!("{prefix}solver_iterations"), "must be at least 1", "use for example 100"));
+            return Err(Error::invalid(
+                format!("{prefix}solver_iterations"),
+                "must be at least 1",
+                "use for example 100",
+            ));
         }
         Ok(())
     }
@@ -143,9 +154,11 @@ impl Effects {
     /// Checks ranges; `prefix` is prepended to field names.
     pub fn validate(&self, prefix: &str) -> Result<()> {
         let check = |name: &str, v: Option<f64>, lo: f64, hi: f64| match v {
-            Some(v) if !(v.is_finite() && v >= lo && v <= hi) => {
-                Err(Error::invalid(format!("{prefix}{name}"), format!("must be in [{lo}, {hi}], got {v}"), "see the effect's documentation in README.md"))
-            }
+            Some(v) if !(v.is_finite() && v >= lo && v <= hi) => Err(Error::invalid(
+                format!("{prefix}{name}"),
+                format!("must be in [{lo}, {hi}], got {v}"),
+                "see the effect's documentation in README.md",
+            )),
             _ => Ok(()),
         };
         check("speed_restitution_k_mps", self.speed_restitution_k_mps, 0.1, 1000.0)?;

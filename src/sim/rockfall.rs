@@ -52,7 +52,8 @@ impl StopReason {
     }
 
     /// All reasons, in output order.
-    pub const ALL: [StopReason; 4] = [StopReason::Stopped, StopReason::LeftTerrain, StopReason::MaxTime, StopReason::Barrier];
+    pub const ALL: [StopReason; 4] =
+        [StopReason::Stopped, StopReason::LeftTerrain, StopReason::MaxTime, StopReason::Barrier];
 }
 
 /// A point of the path, emitted about every `sample_spacing_m` of horizontal travel (and at least every 0.1 s).
@@ -216,7 +217,13 @@ const GRAVITY: Vector3<f64> = Vector3::new(0.0, 0.0, -GRAVITY_MPS2);
 const FLIGHT_MARGIN_M: f64 = 0.05;
 
 impl<'a> Run<'a> {
-    fn new(terrain: &'a Terrain, rock: &'a RockBody, start: RigidState, params: &'a SimParams, rng: &'a mut Rng) -> Self {
+    fn new(
+        terrain: &'a Terrain,
+        rock: &'a RockBody,
+        start: RigidState,
+        params: &'a SimParams,
+        rng: &'a mut Rng,
+    ) -> Self {
         let cr = terrain.materials.iter().map(|m| m.cr.sample(rng)).collect();
         let settings = SolverSettings {
             bounce_threshold_mps: params.bounce_threshold_mps,
@@ -318,7 +325,12 @@ impl<'a> Run<'a> {
         let x0 = self.s.position_m;
         let x1 = x0 + self.s.velocity_mps * h + GRAVITY * (0.5 * h * h);
         let r = self.rock.bounding_radius_m + FLIGHT_MARGIN_M;
-        let top = self.terrain.surface.max_height_in(x0.x.min(x1.x) - r, x0.x.max(x1.x) + r, x0.y.min(x1.y) - r, x0.y.max(x1.y) + r);
+        let top = self.terrain.surface.max_height_in(
+            x0.x.min(x1.x) - r,
+            x0.x.max(x1.x) + r,
+            x0.y.min(x1.y) - r,
+            x0.y.max(x1.y) + r,
+        );
         // z(t) is concave, so its minimum over the step is at an end.
         x0.z.min(x1.z) - r > top
     }
@@ -328,7 +340,8 @@ impl<'a> Run<'a> {
     fn fly(&mut self, h: f64, observer: &mut impl Observer) -> bool {
         let (x0, v0) = (self.s.position_m, self.s.velocity_mps);
         let horizontal = (v0.x * v0.x + v0.y * v0.y).sqrt() * h;
-        let pieces = ((horizontal / self.params.sample_spacing_m).ceil() as usize).max((h / 0.1).ceil() as usize).max(1);
+        let pieces =
+            ((horizontal / self.params.sample_spacing_m).ceil() as usize).max((h / 0.1).ceil() as usize).max(1);
         let mut t_done = 0.0;
         for k in 1..=pieces {
             let tk = h * k as f64 / pieces as f64;
@@ -337,7 +350,8 @@ impl<'a> Run<'a> {
             // Rotation in sub-steps of at most 10 ms (ours): accurate phase for spins up to tens of rad/s.
             let sub = (dt / 0.01).ceil().max(1.0) as usize;
             for _ in 0..sub {
-                let (w1, half) = free_rotation_step(&self.s.omega_body_radps, &self.rock.inertia_kg_m2, dt / sub as f64);
+                let (w1, half) =
+                    free_rotation_step(&self.s.omega_body_radps, &self.rock.inertia_kg_m2, dt / sub as f64);
                 self.s.orientation = rotate(&self.s.orientation, &half, dt / sub as f64);
                 self.s.omega_body_radps = w1;
             }
@@ -390,7 +404,14 @@ impl<'a> Run<'a> {
         }
         let (_, kinetic) = self.kinetic(&self.s);
         let caught = kinetic <= barrier.capacity_j;
-        observer.barrier(&BarrierHit { barrier: k, t_s: self.t, point_m: point, kinetic_j: kinetic, clearance_m: clearance, caught });
+        observer.barrier(&BarrierHit {
+            barrier: k,
+            t_s: self.t,
+            point_m: point,
+            kinetic_j: kinetic,
+            clearance_m: clearance,
+            caught,
+        });
         if caught {
             self.s.position_m = point;
             self.s.velocity_mps = Vector3::zeros();
@@ -424,7 +445,8 @@ impl<'a> Run<'a> {
                     c.warm = p.warm;
                 }
             }
-            let (solved, report) = solve(rock, &q_mid, &mut self.contacts, &before, &free, &self.settings, &mut self.scratch);
+            let (solved, report) =
+                solve(rock, &q_mid, &mut self.contacts, &before, &free, &self.settings, &mut self.scratch);
             after = solved;
             self.out.solver_sweeps += report.iterations as u64;
             if report.energy_guard {
@@ -434,7 +456,8 @@ impl<'a> Run<'a> {
                 self.out.impacts += 1;
                 let v = before.linear_mps;
                 let speed = v.norm();
-                let angle = if speed > 0.0 { (-v.dot(&c.normal) / speed).clamp(-1.0, 1.0).asin().to_degrees() } else { 0.0 };
+                let angle =
+                    if speed > 0.0 { (-v.dot(&c.normal) / speed).clamp(-1.0, 1.0).asin().to_degrees() } else { 0.0 };
                 observer.impact(&super::Impact {
                     t_s: self.t + 0.5 * h,
                     point_m: c.point_m,
@@ -493,7 +516,8 @@ impl<'a> Run<'a> {
             }
         }
         if let Some(c) = effects.soft_drag_per_s {
-            let on_soft = self.contacts.iter().any(|k| self.soft[self.terrain.triangle_material[k.triangle as usize] as usize]);
+            let on_soft =
+                self.contacts.iter().any(|k| self.soft[self.terrain.triangle_material[k.triangle as usize] as usize]);
             if on_soft {
                 let f = (-c * h).exp();
                 vel.linear_mps *= f;

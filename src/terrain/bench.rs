@@ -201,8 +201,8 @@ impl BenchGeometry {
         let id = |i: usize, j: usize| (j * nx + i) as u32;
         let (mut triangles, mut group) = (Vec::new(), Vec::new());
         for j in 0..ny {
-            for i in 0..nx - 1 {
-                let g = if stations[i].2 == BenchPart::Face { 0 } else { 1 };
+            for (i, station) in stations.iter().enumerate().take(nx - 1) {
+                let g = if station.2 == BenchPart::Face { 0 } else { 1 };
                 triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
                 triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
                 group.extend([g, g]);

@@ -1,7 +1,7 @@
 //! Building a [`Terrain`] from the scenario's files: read, put z up, shift to a local origin, merge, and give each
 //! triangle its material.
 
-use super::{point_in_polygon, horizontal_to_local, Material, Terrain};
+use super::{horizontal_to_local, point_in_polygon, Material, Terrain};
 use crate::error::{Error, Result};
 use crate::io::MeshData;
 use crate::raster::{Crs, Grid};
@@ -18,12 +18,20 @@ pub fn read_terrain_file(path: &Path) -> Result<(MeshData, Crs)> {
         "obj" => Ok((crate::io::obj::read_obj(path)?, Crs::default())),
         "stl" => Ok((crate::io::stl::read_stl(path)?, Crs::default())),
         "tif" | "tiff" | "asc" => {
-            let grid = if ext == "asc" { crate::io::ascii_grid::read_grid(path)? } else { crate::io::geotiff::read_grid(path)? };
+            let grid = if ext == "asc" {
+                crate::io::ascii_grid::read_grid(path)?
+            } else {
+                crate::io::geotiff::read_grid(path)?
+            };
             let mesh = grid_to_mesh(&grid, &stem);
             if mesh.triangles.is_empty() {
                 return Err(Error::format(
                     path.display().to_string(),
-                    format!("the DEM has {} valid cells of {}: no 3 neighbouring cells hold data", grid.count_valid(), grid.values.len()),
+                    format!(
+                        "the DEM has {} valid cells of {}: no 3 neighbouring cells hold data",
+                        grid.count_valid(),
+                        grid.values.len()
+                    ),
                     "check the nodata value and that the grid holds elevations",
                 ));
             }
@@ -90,7 +98,12 @@ pub fn grid_to_mesh(grid: &Grid, name: &str) -> MeshData {
 
 /// Builds the terrain of a scenario: `files` (absolute) as described by `spec`, with `materials` (in the order
 /// the scenario defines them).
-pub fn build_terrain(files: &[PathBuf], spec: &TerrainSpec, materials: &[Material], scenario: &Path) -> Result<Terrain> {
+pub fn build_terrain(
+    files: &[PathBuf],
+    spec: &TerrainSpec,
+    materials: &[Material],
+    scenario: &Path,
+) -> Result<Terrain> {
     let mut meshes = Vec::new();
     let mut crs = Crs::default();
     for p in files {
@@ -98,7 +111,26 @@ pub fn build_terrain(files: &[PathBuf], spec: &TerrainSpec, materials: &[Materia
         if crs.is_unknown() {
             crs = c;
         }
-        meshes.push((p, mesh));
+        meshes.push((p.clone(), mesh));
+    }
+    assemble_terrain(&meshes, crs, spec, materials, scenario)
+}
+
+/// Builds a terrain from meshes already in memory, each with the path it came from (whose stem names its
+/// material with `materials_by = "file"`); `spec.files` is not used.
+pub fn assemble_terrain(
+    meshes: &[(PathBuf, MeshData)],
+    mut crs: Crs,
+    spec: &TerrainSpec,
+    materials: &[Material],
+    scenario: &Path,
+) -> Result<Terrain> {
+    if meshes.is_empty() {
+        return Err(Error::invalid(
+            format!("{}: terrain.files", scenario.display()),
+            "no terrain mesh",
+            "list at least one terrain file",
+        ));
     }
     if let Some(code) = spec.crs_epsg {
         crs = Crs { epsg: Some(code), geokeys: None, wkt: crs.wkt };
@@ -117,11 +149,15 @@ pub fn build_terrain(files: &[PathBuf], spec: &TerrainSpec, materials: &[Materia
     let mut vertices = Vec::new();
     let mut triangles = Vec::new();
     let mut names = Vec::new();
-    for (path, mesh) in &meshes {
+    for (path, mesh) in meshes {
         let base = vertices.len() as u32;
         for (i, v) in mesh.vertices.iter().enumerate() {
             if !v.iter().all(|c| c.is_finite()) {
-                return Err(Error::format(path.display().to_string(), format!("vertex {} has a non-finite coordinate", i + 1), "fix or remove that vertex"));
+                return Err(Error::format(
+                    path.display().to_string(),
+                    format!("vertex {} has a non-finite coordinate", i + 1),
+                    "fix or remove that vertex",
+                ));
             }
             vertices.push(up.to_internal(*v) - origin);
         }
@@ -137,7 +173,11 @@ pub fn build_terrain(files: &[PathBuf], spec: &TerrainSpec, materials: &[Materia
         }
     }
     if triangles.is_empty() {
-        return Err(Error::invalid(format!("{}: terrain.files", scenario.display()), "the terrain files hold no triangles", "check the files"));
+        return Err(Error::invalid(
+            format!("{}: terrain.files", scenario.display()),
+            "the terrain files hold no triangles",
+            "check the files",
+        ));
     }
     let index_of = |name: &str| materials.iter().position(|m| m.name == name);
     let single = if materials.len() == 1 { 0 } else { index_of("default").unwrap_or(0) };
@@ -171,7 +211,10 @@ pub fn build_terrain(files: &[PathBuf], spec: &TerrainSpec, materials: &[Materia
         let by = format!("{:?}", spec.materials_by).to_lowercase();
         return Err(Error::invalid(
             format!("{}: terrain.materials_by", scenario.display()),
-            format!("the terrain has {by} names with no material: {}", unknown.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ")),
+            format!(
+                "the terrain has {by} names with no material: {}",
+                unknown.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ")
+            ),
             format!(
                 "define [materials.NAME] for each, or map them with [terrain.material_names] (defined: {})",
                 materials.iter().map(|m| m.name.as_str()).collect::<Vec<_>>().join(", ")
@@ -188,11 +231,15 @@ pub fn build_terrain(files: &[PathBuf], spec: &TerrainSpec, materials: &[Materia
             }
         }
     }
-    let mut terrain = Terrain::from_local(vertices, &triangles, &tri_mat, materials.to_vec())
-        .map_err(|_| Error::invalid(format!("{}: terrain.files", scenario.display()), "every triangle is degenerate or vertical", "check the files and the `up` axis"))?;
+    let mut terrain = Terrain::from_local(vertices, &triangles, &tri_mat, materials.to_vec()).map_err(|_| {
+        Error::invalid(
+            format!("{}: terrain.files", scenario.display()),
+            "every triangle is degenerate or vertical",
+            "check the files and the `up` axis",
+        )
+    })?;
     terrain.origin = origin;
     terrain.up = up;
     terrain.crs = crs;
     Ok(terrain)
 }
-

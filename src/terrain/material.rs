@@ -42,15 +42,24 @@ impl Material {
     /// Checks ranges; `field` is the material's place in the scenario (e.g. `materials.face`).
     pub fn validate(&self, field: &str) -> Result<()> {
         self.cr.validate(&format!("{field}.cr"), 0.0, 1.0)?;
-        for (name, v) in [("static_friction_deg", self.static_friction_deg), ("dynamic_friction_deg", self.dynamic_friction_deg)] {
+        for (name, v) in
+            [("static_friction_deg", self.static_friction_deg), ("dynamic_friction_deg", self.dynamic_friction_deg)]
+        {
             if !(v.is_finite() && (0.0..90.0).contains(&v)) {
-                return Err(Error::invalid(format!("{field}.{name}"), format!("must be in [0, 90) degrees, got {v}"), "give a friction angle such as 40"));
+                return Err(Error::invalid(
+                    format!("{field}.{name}"),
+                    format!("must be in [0, 90) degrees, got {v}"),
+                    "give a friction angle such as 40",
+                ));
             }
         }
         if self.dynamic_friction_deg > self.static_friction_deg {
             return Err(Error::invalid(
                 format!("{field}.dynamic_friction_deg"),
-                format!("{} is larger than the static friction angle {}", self.dynamic_friction_deg, self.static_friction_deg),
+                format!(
+                    "{} is larger than the static friction angle {}",
+                    self.dynamic_friction_deg, self.static_friction_deg
+                ),
                 "dynamic friction cannot exceed static friction; lower it or raise static_friction_deg",
             ));
         }

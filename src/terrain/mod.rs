@@ -95,7 +95,11 @@ impl Terrain {
         materials: Vec<Material>,
     ) -> crate::Result<Terrain> {
         let (surface, kept, stats) = Surface::new(vertices, triangles).ok_or_else(|| {
-            crate::Error::invalid("terrain", "no usable triangle (all are degenerate or vertical)", "check the terrain files")
+            crate::Error::invalid(
+                "terrain",
+                "no usable triangle (all are degenerate or vertical)",
+                "check the terrain files",
+            )
         })?;
         let triangle_material = kept.iter().map(|&i| triangle_material[i]).collect();
         let friction = materials.iter().map(|m| (m.mu_static(), m.mu_dynamic())).collect();
@@ -114,7 +118,12 @@ impl Terrain {
 
     /// A square grid terrain over [0, size]² with `n` × `n` cells and heights `z(x, y)`, one material. For tests,
     /// examples and synthetic studies.
-    pub fn from_function(size_m: f64, n: usize, material: Material, z: impl Fn(f64, f64) -> f64) -> crate::Result<Terrain> {
+    pub fn from_function(
+        size_m: f64,
+        n: usize,
+        material: Material,
+        z: impl Fn(f64, f64) -> f64,
+    ) -> crate::Result<Terrain> {
         let mut v = Vec::with_capacity((n + 1) * (n + 1));
         for j in 0..=n {
             for i in 0..=n {

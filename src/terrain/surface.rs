@@ -54,6 +54,7 @@ pub struct Surface {
     zmax: Vec<(usize, usize, Vec<f64>)>,
     z_min_m: f64,
     z_max_m: f64,
+    extent: (f64, f64, f64, f64),
 }
 
 /// Counts of what [`Surface::new`] kept and dropped.
@@ -85,7 +86,7 @@ impl Surface {
             let (a, b, c) = (vertices[ia], vertices[ib], vertices[ic]);
             let n = (b - a).cross(&(c - a));
             let scale = (b - a).norm_squared().max((c - a).norm_squared()).max((c - b).norm_squared());
-            if !(n.norm() > 1e-10 * scale) || !n.iter().all(|v| v.is_finite()) {
+            if n.norm() <= 1e-10 * scale || !n.iter().all(|v| v.is_finite()) {
                 stats.degenerate_dropped += 1;
                 continue;
             }
@@ -155,6 +156,7 @@ impl Surface {
             zmax: Vec::new(),
             z_min_m: lo.z,
             z_max_m: hi.z,
+            extent: (lo.x, lo.y, hi.x, hi.y),
         };
         surface.build_index();
         Some((surface, kept, stats))
@@ -345,9 +347,9 @@ impl Surface {
         }
     }
 
-    /// Horizontal bounds (x_min, y_min, x_max, y_max) of the surface, m.
+    /// Horizontal bounds (x_min, y_min, x_max, y_max) of the surface's vertices, m.
     pub fn bounds_xy(&self) -> (f64, f64, f64, f64) {
-        (self.x0, self.y0, self.x0 + self.nx as f64 * self.bin_m, self.y0 + self.ny as f64 * self.bin_m)
+        self.extent
     }
 
     /// Lowest and highest vertex heights, m.
@@ -385,7 +387,11 @@ impl Surface {
 /// Whether a triangle's horizontal footprint meets the box [x0, x1] × [y0, y1] (separating axes: the box axes
 /// and the three edge normals).
 fn triangle_overlaps_box(p: &[Vector3<f64>; 3], x0: f64, y0: f64, x1: f64, y1: f64) -> bool {
-    if p.iter().all(|v| v.x < x0) || p.iter().all(|v| v.x > x1) || p.iter().all(|v| v.y < y0) || p.iter().all(|v| v.y > y1) {
+    if p.iter().all(|v| v.x < x0)
+        || p.iter().all(|v| v.x > x1)
+        || p.iter().all(|v| v.y < y0)
+        || p.iter().all(|v| v.y > y1)
+    {
         return false;
     }
     let corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)];

@@ -1,0 +1,247 @@
+//! `talus run` end to end in temporary folders: outputs, determinism across thread counts, GeoTIFFs read back (and
+//! checked with `gdalinfo` where it is installed), and bad input answered with exit code 2 and no output.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn talus() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_talus"))
+}
+
+/// A 40 m × 80 m DEM (2 m cells): a 35° slope falling toward +x onto a flat floor, with one nodata cell.
+fn write_dem(dir: &Path) -> PathBuf {
+    let (nc, nr, cell) = (40usize, 20usize, 2.0);
+    let mut s =
+        format!("ncols {nc}\nnrows {nr}\nxllcorner 500000\nyllcorner 5000000\ncellsize {cell}\nNODATA_value -9999\n");
+    for r in 0..nr {
+        let row: Vec<String> = (0..nc)
+            .map(|c| {
+                if r == 0 && c == nc - 1 {
+                    return "-9999".to_string();
+                }
+                let x = (c as f64 + 0.5) * cell;
+                let z = if x < 40.0 { (40.0 - x) * 35f64.to_radians().tan() } else { 0.0 };
+                format!("{:.3}", 100.0 + z)
+            })
+            .collect();
+        s.push_str(&row.join(" "));
+        s.push('\n');
+    }
+    let p = dir.join("slope.asc");
+    std::fs::write(&p, s).unwrap();
+    p
+}
+
+fn scenario(dir: &Path, extra: &str, cr_mean: f64, mass: &str) -> PathBuf {
+    write_dem(dir);
+    let text = format!(
+        r#"
+[terrain]
+files = ["slope.asc"]
+crs_epsg = 2056
+
+[materials.default]
+cr_mean = {cr_mean}
+cr_sd = 0.05
+static_friction_deg = 40.0
+dynamic_friction_deg = 32.0
+
+[[sources]]
+type = "polyline"
+points = [[500004.0, 5000010.0], [500004.0, 5000030.0]]
+count = 24
+height_m = 0.2
+
+[rocks]
+shapes = ["cube", "flat_box", "smartie"]
+mass_kg = {mass}
+
+[simulation]
+seed = 3
+
+[output]
+cell_size_m = 4.0
+{extra}
+"#
+    );
+    let p = dir.join("scenario.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn run_writes_every_output_and_is_identical_for_1_and_2_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let sc = scenario(dir.path(), "", 0.3, "[50.0, 500.0]");
+    let mut outs = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.path().join(format!("out{threads}"));
+        let o = talus()
+            .args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap(), "--threads", threads, "--paths", "3"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        outs.push(out);
+    }
+    let names = [
+        "endpoints.csv",
+        "endpoint_density.tif",
+        "reach_probability.tif",
+        "kinetic_energy_p95_kj.tif",
+        "kinetic_energy_max_kj.tif",
+        "bounce_height_p95_m.tif",
+        "bounce_height_max_m.tif",
+        "paths.csv",
+        "paths.vtk",
+    ];
+    for n in names {
+        let a = std::fs::read(outs[0].join(n)).unwrap_or_else(|_| panic!("{n} missing"));
+        let b = std::fs::read(outs[1].join(n)).unwrap();
+        assert!(a == b, "{n} differs between 1 and 2 threads");
+    }
+    // No temporary file is left behind.
+    for e in std::fs::read_dir(&outs[0]).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!name.ends_with(".tmp"), "{name} left behind");
+    }
+    let csv = std::fs::read_to_string(outs[0].join("endpoints.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "rock_id,source_id,shape,mass_kg,release_x_m,release_y_m,release_z_m,end_x_m,end_y_m,end_z_m,stop_reason,runout_m,travel_time_s,max_kinetic_j,max_bounce_m"
+    );
+    assert_eq!(lines.count(), 24);
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(outs[0].join("summary.json")).unwrap()).unwrap();
+    for key in
+        ["talus_version", "seed", "input_sha256", "parameters", "stop_reasons", "wall_time_s", "rocks_per_second"]
+    {
+        assert!(summary.get(key).is_some(), "summary.json lacks {key}");
+    }
+    assert_eq!(summary["rocks"], 24);
+    assert_eq!(summary["input_sha256"].as_object().unwrap().len(), 2);
+}
+
+#[test]
+fn rasters_read_back_in_the_terrain_frame_with_crs_and_nodata() {
+    let dir = tempfile::tempdir().unwrap();
+    let sc = scenario(dir.path(), "", 0.3, "300.0");
+    let out = dir.path().join("out");
+    let o = talus().args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let reach = talus::io::geotiff::read_grid(&out.join("reach_probability.tif")).unwrap();
+    assert_eq!(reach.crs.epsg, Some(2056));
+    assert_eq!((reach.cell_x_m, reach.cell_y_m), (4.0, 4.0));
+    // The DEM's nodes are cell centres from 500001 to 500079 m: the raster frame snaps outward to 4 m.
+    assert_eq!(reach.x_min_m, 500000.0);
+    assert_eq!(reach.y_max_m, 5000040.0);
+    assert_eq!((reach.ncols, reach.nrows), (20, 10));
+    let (lo, hi) = reach.min_max().unwrap();
+    assert!(lo == 0.0 && hi <= 1.0 && hi > 0.2, "{lo} {hi}");
+    let density = talus::io::geotiff::read_grid(&out.join("endpoint_density.tif")).unwrap();
+    let total: f64 = density.values.iter().filter(|v| !v.is_nan()).map(|&v| v as f64).sum();
+    let stopped =
+        std::fs::read_to_string(out.join("endpoints.csv")).unwrap().lines().filter(|l| l.contains(",stopped,")).count();
+    assert!(
+        (total - stopped as f64 / 24.0).abs() < 0.1,
+        "density sums to {total}, stopped fraction {}",
+        stopped as f64 / 24.0
+    );
+    let energy = talus::io::geotiff::read_grid(&out.join("kinetic_energy_max_kj.tif")).unwrap();
+    assert!(energy.values.iter().any(|v| v.is_nan()), "cells no rock reached are nodata");
+    if Command::new("gdalinfo").arg("--version").output().is_ok_and(|o| o.status.success()) {
+        let info = Command::new("gdalinfo").arg(out.join("reach_probability.tif")).output().unwrap();
+        let text = String::from_utf8_lossy(&info.stdout);
+        assert!(text.contains("ID[\"EPSG\",2056]"), "{text}");
+        assert!(text.contains("Origin = (500000.000000000000000,5000040.000000000000000)"), "{text}");
+        assert!(text.contains("Pixel Size = (4.000000000000000,-4.000000000000000)"), "{text}");
+        assert!(text.contains("NoData Value=-9999"), "{text}");
+    } else {
+        eprintln!("note: gdalinfo not installed; GDAL check skipped");
+    }
+}
+
+/// Runs `talus run` on a scenario expected to fail: exit code 2, every `needles` in stderr, nothing written.
+fn fails_cleanly(dir: &Path, scenario: &Path, needles: &[&str]) {
+    let out = dir.join("out_bad");
+    let o = talus().args(["run", scenario.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    for n in needles {
+        assert!(err.contains(n), "stderr lacks '{n}': {err}");
+    }
+    assert!(err.contains("how to fix"), "no fix suggested: {err}");
+    assert!(!out.exists() || std::fs::read_dir(&out).unwrap().next().is_none(), "output written despite the error");
+}
+
+fn with_terrain(dir: &Path, file: &str, body: &[u8]) -> PathBuf {
+    let sc = scenario(dir, "", 0.3, "300.0");
+    std::fs::write(dir.join(file), body).unwrap();
+    let text =
+        std::fs::read_to_string(&sc).unwrap().replace("files = [\"slope.asc\"]", &format!("files = [\"{file}\"]"));
+    std::fs::write(&sc, text).unwrap();
+    sc
+}
+
+#[test]
+fn bad_input_is_answered_with_where_what_and_how() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // Truncated binary STL: the header promises 10 triangles.
+    let mut stl = vec![0u8; 80];
+    stl.extend_from_slice(&10u32.to_le_bytes());
+    stl.extend_from_slice(&[0u8; 120]);
+    fails_cleanly(d, &with_terrain(d, "cut.stl", &stl), &["cut.stl"]);
+    // OBJ with a NaN vertex.
+    fails_cleanly(d, &with_terrain(d, "nan.obj", b"v 0 0 0\nv 1 0 nan\nv 0 1 0\nf 1 2 3\n"), &["nan.obj:2"]);
+    // Empty mesh.
+    fails_cleanly(d, &with_terrain(d, "empty.obj", b"# nothing here\nv 0 0 0\n"), &["empty.obj"]);
+    // DEM all nodata.
+    fails_cleanly(d, &with_terrain(d, "void.asc", b"ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\nNODATA_value -9999\n-9999 -9999 -9999\n-9999 -9999 -9999\n"), &["void.asc"]);
+    // Source polygon outside the terrain.
+    let sc = scenario(d, "", 0.3, "300.0");
+    let text = std::fs::read_to_string(&sc).unwrap().replace(
+        "type = \"polyline\"\npoints = [[500004.0, 5000010.0], [500004.0, 5000030.0]]",
+        "type = \"polygon\"\npoints = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]",
+    );
+    std::fs::write(&sc, text).unwrap();
+    fails_cleanly(d, &sc, &["sources[0].points", "does not overlap the terrain"]);
+    // Cr of 1.5.
+    fails_cleanly(d, &scenario(d, "", 1.5, "300.0"), &["materials.default.cr", "1.5"]);
+    // A negative mass.
+    fails_cleanly(d, &scenario(d, "", 0.3, "-5.0"), &["rocks.mass_kg", "-5"]);
+    // An unknown key.
+    fails_cleanly(d, &scenario(d, "colour = \"red\"", 0.3, "300.0"), &["scenario.toml:", "unknown field `colour`"]);
+    // A missing scenario file.
+    let o = talus()
+        .args(["run", d.join("nope.toml").to_str().unwrap(), "--out", d.join("o").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("nope.toml"));
+}
+
+#[test]
+fn every_subcommand_has_help_with_an_example() {
+    for args in [vec!["run", "--help"], vec!["mesh", "bench", "--help"]] {
+        let o = talus().args(&args).output().unwrap();
+        assert!(o.status.success());
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(text.contains("Example"), "{args:?}: {text}");
+    }
+}
+
+#[test]
+fn mesh_bench_writes_an_obj_with_face_and_floor_groups() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("b.obj");
+    let o = talus()
+        .args(["mesh", "bench", "--out", out.to_str().unwrap(), "--benches", "2", "--face-angle-deg", "75"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let mesh = talus::io::obj::read_obj(&out).unwrap();
+    assert_eq!(mesh.group_names, vec!["face".to_string(), "floor".to_string()]);
+    let zmax = mesh.vertices.iter().map(|v| v[2]).fold(0.0, f64::max);
+    assert!((zmax - 60.0).abs() < 1e-9, "2 benches + the last face of 20 m: {zmax}");
+}
