@@ -247,7 +247,7 @@ pub fn run_scenario(
     crate::parallel::map_in_order(
         n,
         threads,
-        256,
+        128,
         |i| {
             let mut track = (CellTrack::new(&frame), (i < n_paths).then(PathRecorder::default));
             let rec = setup.run_rock(i, &mut track);

@@ -53,7 +53,7 @@ count = 24
 height_m = 0.2
 
 [rocks]
-shapes = ["cube", "flat_box", "smartie"]
+shapes = ["cube", "flat_box", "smartie", "block.xyz"]
 mass_kg = {mass}
 
 [simulation]
@@ -66,6 +66,12 @@ cell_size_m = 4.0
     );
     let p = dir.join("scenario.toml");
     std::fs::write(&p, text).unwrap();
+    // An irregular block as a point file, for hull rocks.
+    std::fs::write(
+        dir.join("block.xyz"),
+        "# x y z\n0 0 0\n1.2 0.1 0\n0.2 0.9 0.1\n0.1 0.2 0.7\n1.0 0.8 0.6\n0.6 0.4 -0.3\n",
+    )
+    .unwrap();
     p
 }
 
@@ -110,7 +116,11 @@ fn run_writes_every_output_and_is_identical_for_1_and_2_threads() {
         lines.next().unwrap(),
         "rock_id,source_id,shape,mass_kg,release_x_m,release_y_m,release_z_m,end_x_m,end_y_m,end_z_m,stop_reason,runout_m,travel_time_s,max_kinetic_j,max_bounce_m"
     );
-    assert_eq!(lines.count(), 24);
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 24);
+    for shape in ["cube", "flat_box", "smartie", "block"] {
+        assert!(rows.iter().any(|r| r.split(',').nth(2) == Some(shape)), "no {shape} rock");
+    }
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(outs[0].join("summary.json")).unwrap()).unwrap();
     for key in
@@ -119,7 +129,7 @@ fn run_writes_every_output_and_is_identical_for_1_and_2_threads() {
         assert!(summary.get(key).is_some(), "summary.json lacks {key}");
     }
     assert_eq!(summary["rocks"], 24);
-    assert_eq!(summary["input_sha256"].as_object().unwrap().len(), 2);
+    assert_eq!(summary["input_sha256"].as_object().unwrap().len(), 3, "scenario, DEM and hull file");
 }
 
 #[test]

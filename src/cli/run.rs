@@ -44,7 +44,10 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     let pb = progress::bar(0, "rocks");
     let progress = |done: usize, total: usize| {
         if done == 1 {
+            // Rates and time left count from the first rock, not from the terrain loading.
             pb.set_length(total as u64);
+            pb.reset_elapsed();
+            pb.reset_eta();
         }
         pb.set_position(done as u64);
     };
