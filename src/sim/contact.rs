@@ -266,7 +266,7 @@ fn sweep(rows: &mut [Row], free: &Velocities, inv_m: f64, max_iterations: usize)
 }
 
 /// A unit vector perpendicular to unit `n`.
-fn any_perpendicular(n: &Vector3<f64>) -> Vector3<f64> {
+pub(crate) fn any_perpendicular(n: &Vector3<f64>) -> Vector3<f64> {
     let a = if n.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
     (a - n * n.dot(&a)).normalize()
 }

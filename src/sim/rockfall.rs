@@ -561,7 +561,7 @@ impl<'a> Run<'a> {
                 if let Some(rough) = effects.roughness_m {
                     let tilt = uniform(self.rng) * (rough / self.rock.equivalent_radius_m()).atan();
                     let azimuth = std::f64::consts::TAU * uniform(self.rng);
-                    let t1 = perpendicular(&normal);
+                    let t1 = super::contact::any_perpendicular(&normal);
                     let t2 = normal.cross(&t1);
                     normal = (normal * tilt.cos() + (t1 * azimuth.cos() + t2 * azimuth.sin()) * tilt.sin()).normalize();
                 }
@@ -639,8 +639,3 @@ impl<'a> Run<'a> {
     }
 }
 
-/// A unit vector perpendicular to unit `n`.
-fn perpendicular(n: &Vector3<f64>) -> Vector3<f64> {
-    let a = if n.x.abs() < 0.9 { Vector3::x() } else { Vector3::y() };
-    (a - n * n.dot(&a)).normalize()
-}
