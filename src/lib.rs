@@ -8,6 +8,7 @@
 //! Physics choices cite `physics.md` (shipped with the project's shared docs) or a paper, or are marked as ours.
 #![warn(missing_docs)]
 
+pub mod benches;
 pub mod campaign;
 pub mod ensemble;
 pub mod error;

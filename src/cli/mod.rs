@@ -1,8 +1,11 @@
 //! Command-line arguments (clap) and their dispatch. The library never sees clap types.
 
+mod benches;
 mod mesh;
+mod profile;
 mod progress;
 mod run;
+mod section;
 
 use clap::{Parser, Subcommand};
 
@@ -17,6 +20,9 @@ struct Cli {
 #[derive(Debug, Subcommand)]
 enum Command {
     Run(run::RunArgs),
+    Profile(profile::ProfileArgs),
+    Benches(benches::BenchesArgs),
+    Section(section::SectionArgs),
     Mesh(mesh::MeshArgs),
 }
 
@@ -33,6 +39,9 @@ pub fn main() -> anyhow::Result<()> {
     };
     match cli.command {
         Command::Run(a) => run::run(a),
+        Command::Profile(a) => profile::run(a),
+        Command::Benches(a) => benches::run(a),
+        Command::Section(a) => section::run(a),
         Command::Mesh(a) => mesh::run(a),
     }
 }

@@ -5,7 +5,7 @@
 //! perturbation of the segment angle, and slides in closed form with a friction angle. Mass only scales energies
 //! (and sizes the rock for the arrow-height switch and the optional rotational rules). See physics.md §3 and §8.
 //!
-//! - [`Profile`]: the polyline (CSV, bench geometry, or a section through a 3D surface).
+//! - [`Profile`]: the polyline (CSV, bench geometry, or a section through a 3D surface, [`section_from_mesh`]).
 //! - [`Material2d`]: Rn, Rt, friction, roughness, with the seed paper's Table 1 presets.
 //! - [`Options2d`]: optional physics and thresholds.
 //! - [`simulate_rock`]: one rock; a [`PathObserver`] sees its analytic path pieces.
@@ -50,6 +50,7 @@ mod profile;
 mod release;
 mod run;
 pub mod scenario;
+mod section;
 mod slope;
 
 pub use engine::{pfeiffer_bowen_rn, simulate_rock, RockResult2d, RockStart2d, StopReason, G_MPS2, PFEIFFER_BOWEN_MPS};
@@ -64,4 +65,5 @@ pub use run::{
     Percentiles, ProfileInfo, ProfileSummary, StopCounts,
 };
 pub use scenario::{ProfileScenario, ProfileSource, ReleaseSpec, ResolvedScenario};
+pub use section::{section_from_mesh, SectionMaterials};
 pub use slope::Slope2d;

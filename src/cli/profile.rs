@@ -1,0 +1,83 @@
+//! `talus profile`.
+
+use anyhow::Context;
+use clap::Args;
+use std::path::PathBuf;
+use talus::lumped2d::{run_profile, ProfileScenario};
+
+/// Run a 2D lumped-mass (2DLM) profile scenario: end points, envelopes of bounce height, speed and kinetic energy
+/// along the profile, and what passes the vertical collectors.
+///
+/// The scenario format is documented in talus::lumped2d::scenario (examples/profile_bench.toml is a commented
+/// example). Writes endpoints.csv, envelopes.csv, collectors.csv, profile.csv and summary.json.
+///
+/// Example:
+///   talus profile examples/profile_bench.toml --out outputs/profile_bench --rocks 1000 --seed 7
+#[derive(Debug, Args)]
+pub struct ProfileArgs {
+    /// Profile scenario file (TOML).
+    scenario: PathBuf,
+    /// Output folder (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Number of rocks (overrides the scenario).
+    #[arg(long)]
+    rocks: Option<usize>,
+    /// Seed of all random draws (overrides the scenario).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Threads (default: all cores). Results do not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+}
+
+pub fn run(a: ProfileArgs) -> anyhow::Result<()> {
+    if a.rocks == Some(0) {
+        anyhow::bail!("--rocks: must be at least 1");
+    }
+    if a.threads == Some(0) {
+        anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)");
+    }
+    let mut scenario = ProfileScenario::load(&a.scenario)?;
+    if let Some(n) = a.rocks {
+        scenario.rocks = n;
+    }
+    if let Some(s) = a.seed {
+        scenario.seed = s;
+    }
+    let go = || run_profile(&scenario, &a.out).with_context(|| format!("running {}", a.scenario.display()));
+    #[cfg(feature = "parallel")]
+    let summary = match a.threads {
+        Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n).build().context("starting the threads")?.install(go),
+        None => go(),
+    }?;
+    #[cfg(not(feature = "parallel"))]
+    let summary = go()?;
+    let s = summary.stop_reasons;
+    println!(
+        "{} rocks in {:.2} s ({:.0} rocks/s): {} stopped, {} left the profile, {} hit the event cap, {} the time cap",
+        summary.rocks,
+        summary.wall_time_s,
+        summary.rocks_per_second,
+        s.stopped,
+        s.left_profile,
+        s.max_events,
+        s.max_time
+    );
+    let m = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
+    println!(
+        "run-out median {} m (P95 {} m, max {} m)",
+        m(summary.runout_m.p50),
+        m(summary.runout_m.p95),
+        m(summary.runout_m.max)
+    );
+    if let Some(c) = &summary.bench_capture {
+        let per: Vec<String> = (1..c.fraction_per_bench.len())
+            .map(|k| format!("bench {k} {:.0} %", 100.0 * c.fraction_per_bench[k]))
+            .chain(std::iter::once(format!("past the last {:.0} %", 100.0 * c.fraction_per_bench[0])))
+            .collect();
+        println!("captured: {}", per.join(", "));
+    }
+    println!("wrote {} files to {}", summary.outputs.len(), a.out.display());
+    Ok(())
+}
