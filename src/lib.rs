@@ -9,7 +9,9 @@
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod barrier;
 pub mod campaign;
+pub mod collector;
 pub mod ensemble;
 pub mod hazard;
 pub mod io;
@@ -18,11 +20,13 @@ pub mod parallel;
 pub mod random;
 pub mod raster;
 pub mod render;
+pub mod report;
 pub mod rock;
 pub mod run;
 pub mod scenario;
 pub mod sim;
 pub mod source;
 pub mod terrain;
+pub mod zones;
 
 pub use error::{Error, Result};
