@@ -433,6 +433,7 @@ pub fn run_scenario_with(
 
 /// The six hazard rasters (in [`RASTERS`] order). Cells off the terrain are nodata; on the terrain, probabilities
 /// are 0 where nothing came, energies and heights nodata where no rock passed.
+#[allow(clippy::needless_range_loop)] // k indexes the frame, the accumulator, the density and the grids alike
 pub fn hazard_grids(acc: &HazardAccumulator, terrain: &Terrain, stopped_xy: &[[f64; 2]], n_rocks: usize, bandwidth_m: f64, crs: &crate::raster::Crs) -> Vec<Grid> {
     let frame = &acc.frame;
     let density = endpoint_density(frame, stopped_xy, n_rocks, bandwidth_m);

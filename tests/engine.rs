@@ -178,7 +178,7 @@ fn no_impact_adds_energy_and_no_rock_ends_below_the_surface() {
     let mut total_impacts = 0;
     for i in 0..12u64 {
         let mut rng = stream(5, i);
-        let r = rock(shapes[i as usize % 3].clone(), [50.0, 800.0, 5000.0][i as usize % 3 / 1 % 3]);
+        let r = rock(shapes[i as usize % 3].clone(), [50.0, 800.0, 5000.0][i as usize % 3]);
         let q = talus::rock::random_orientation(&mut rng);
         let x = 20.0 + 3.0 * i as f64;
         let z = terrain.surface.height(x, 100.0).unwrap() + r.bounding_radius_m + 0.5;

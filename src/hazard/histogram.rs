@@ -33,7 +33,7 @@ impl LogBins {
 
     /// The counter a value falls in.
     pub fn bin(&self, v: f64) -> usize {
-        if !(v > self.min) {
+        if v.is_nan() || v <= self.min {
             return 0;
         }
         let k = ((v / self.min).log10() * self.per_decade as f64).floor() as usize;

@@ -264,6 +264,23 @@ fn check_positive(field: &str, name: &str, values: &[f64]) -> Result<()> {
     Ok(())
 }
 
+impl RockBody {
+    /// The same shape and density scaled to `mass_kg`.
+    pub fn with_mass(&self, mass_kg: f64) -> RockBody {
+        let s = (mass_kg / self.mass_kg).cbrt();
+        RockBody {
+            shape: self.shape.clone(),
+            mass_kg,
+            inertia_kg_m2: self.inertia_kg_m2 * s.powi(5),
+            vertices_m: self.vertices_m.iter().map(|v| v * s).collect(),
+            faces: self.faces.iter().map(|(n, d)| (*n, d * s)).collect(),
+            bounding_radius_m: self.bounding_radius_m * s,
+            volume_m3: self.volume_m3 * s.powi(3),
+            extents_m: self.extents_m.map(|e| e * s),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -326,22 +343,5 @@ mod tests {
         assert!(e.to_string().contains("rocks.mass_kg"), "{e}");
         let flat = ShapeKind::Hull { name: "flat".into(), points: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [1.0, 1.0, 0.0]] };
         assert!(RockBody::new(&flat, RockSize::Mass { mass_kg: 1.0, density_kg_m3: 2650.0 }, "rocks").is_err());
-    }
-}
-
-impl RockBody {
-    /// The same shape and density scaled to `mass_kg`.
-    pub fn with_mass(&self, mass_kg: f64) -> RockBody {
-        let s = (mass_kg / self.mass_kg).cbrt();
-        RockBody {
-            shape: self.shape.clone(),
-            mass_kg,
-            inertia_kg_m2: self.inertia_kg_m2 * s.powi(5),
-            vertices_m: self.vertices_m.iter().map(|v| v * s).collect(),
-            faces: self.faces.iter().map(|(n, d)| (*n, d * s)).collect(),
-            bounding_radius_m: self.bounding_radius_m * s,
-            volume_m3: self.volume_m3 * s.powi(3),
-            extents_m: self.extents_m.map(|e| e * s),
-        }
     }
 }
