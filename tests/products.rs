@@ -207,7 +207,7 @@ fn chromium_renders(page: &Path) {
     }
     let profile = tempfile::tempdir().unwrap();
     let shot = profile.path().join("shot.png");
-    let status = std::process::Command::new(chromium)
+    let mut child = std::process::Command::new(chromium)
         .args([
             "--headless",
             "--no-sandbox",
@@ -223,8 +223,20 @@ fn chromium_renders(page: &Path) {
         ])
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
-        .status()
+        .spawn()
         .unwrap();
+    // Give Chromium a minute at most: a hung browser must not hang the test suite.
+    let t0 = std::time::Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if t0.elapsed() > std::time::Duration::from_secs(60) {
+            let _ = child.kill();
+            panic!("chromium did not finish within 60 s");
+        }
+        std::thread::sleep(std::time::Duration::from_millis(100));
+    };
     assert!(status.success(), "chromium failed: {status}");
     assert_eq!(png_size(&shot), (1400, 2400));
     let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&shot).unwrap()));

@@ -6,7 +6,7 @@
 //! specification (`{"type": "name", "properties": {"name": "urn:ogc:def:crs:EPSG::CODE"}}`). RFC 7946 dropped that
 //! member and fixed WGS 84, but GDAL and QGIS still read it, and it is the only way to keep projected coordinates
 //! (ours: the same choice as GDAL's GeoJSON driver with `RFC7946=NO`, its default). Coordinates are rounded to the
-//! millimetre; `NaN` properties become `null`.
+//! millimetre; `NaN` properties become `null`; a vertex without an elevation is written as [x, y].
 //!
 //! # Reading polylines
 //! - GeoJSON: a `LineString` or `MultiLineString` geometry, a `Feature` holding one, or a `FeatureCollection`;
@@ -66,8 +66,10 @@ fn round_mm(v: f64) -> Value {
     }
 }
 
+/// [x, y, z], or [x, y] when z is unknown (off the terrain): a position never holds `null`.
 fn position(p: &[f64; 3]) -> Value {
-    Value::Array(p.iter().map(|&v| round_mm(v)).collect())
+    let n = if p[2].is_finite() { 3 } else { 2 };
+    Value::Array(p[..n].iter().map(|&v| round_mm(v)).collect())
 }
 
 fn geometry_value(g: &Geometry) -> Value {
@@ -282,6 +284,7 @@ mod tests {
         assert_eq!(v["crs"]["properties"]["name"], "urn:ogc:def:crs:EPSG::2056");
         assert_eq!(v["features"][0]["properties"]["e"], Value::Null);
         assert_eq!(v["features"][0]["geometry"]["coordinates"][1][1], 5.0);
+        assert_eq!(position(&[1.0, 2.0, f64::NAN]), json!([1.0, 2.0]));
         let lines = read_lines(&p).unwrap();
         assert_eq!(lines, vec![NamedLine { name: Some("fence".into()), xy: vec![[1.0, 2.0], [4.0, 5.0]] }]);
     }
