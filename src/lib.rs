@@ -8,8 +8,10 @@
 //! Physics choices cite `physics.md` (shipped with the project's shared docs) or a paper, or are marked as ours.
 #![warn(missing_docs)]
 
+pub mod barrier;
 pub mod benches;
 pub mod campaign;
+pub mod collector;
 pub mod ensemble;
 pub mod error;
 pub mod hazard;
@@ -19,11 +21,13 @@ pub mod parallel;
 pub mod random;
 pub mod raster;
 pub mod render;
+pub mod report;
 pub mod rock;
 pub mod run;
 pub mod scenario;
 pub mod sim;
 pub mod source;
 pub mod terrain;
+pub mod zones;
 
 pub use error::{Error, Result};

@@ -78,6 +78,10 @@ pub struct RunSummary {
     pub rocks_per_second: f64,
     /// Files written.
     pub outputs: Vec<String>,
+    /// The scenario's collector lines: rocks crossing, energies and heights.
+    pub collectors: Vec<crate::collector::facts::CollectorFacts>,
+    /// The barriers: rocks caught and rocks that broke through.
+    pub barriers: Vec<crate::collector::facts::BarrierFacts>,
 }
 
 /// Terrain facts for the manifest.
@@ -216,8 +220,50 @@ pub fn run_scenario(
     out_dir: &Path,
     progress: &dyn Fn(usize, usize),
 ) -> Result<RunSummary> {
+    Ok(run_scenario_with(sc, overrides, out_dir, progress, &RunExtras::default(), &mut |_, _| {})?.summary)
+}
+
+/// What a run tracks besides the scenario's own collectors (used by `talus barrier`).
+#[derive(Debug, Clone, Default)]
+pub struct RunExtras {
+    /// More collector lines (local frame), after the scenario's; they are not drawn on the maps.
+    pub collectors: Vec<crate::collector::Collector>,
+    /// The protected zone tracked for every rock.
+    pub zone: Option<crate::collector::ProtectedZone>,
+}
+
+/// A run's summary and what the caller may want to look at further.
+#[derive(Debug, Clone)]
+pub struct RunOutput {
+    /// The manifest.
+    pub summary: RunSummary,
+    /// The rasters, in [`RASTERS`] order.
+    pub grids: Vec<Grid>,
+    /// The terrain (with its barriers).
+    pub terrain: Terrain,
+    /// The collectors (the scenario's, then the extras).
+    pub collectors: crate::collector::CollectorSet,
+    /// Their statistics.
+    pub collector_stats: crate::collector::CollectorStats,
+}
+
+/// [`run_scenario`] with extra collectors and a protected zone; `on_rock` sees every rock's record and crossings,
+/// in rock order.
+pub fn run_scenario_with(
+    sc: &Scenario,
+    overrides: &RunOverrides,
+    out_dir: &Path,
+    progress: &dyn Fn(usize, usize),
+    extras: &RunExtras,
+    on_rock: &mut dyn FnMut(&RockRecord, &crate::collector::RockCrossings),
+) -> Result<RunOutput> {
     let t0 = Instant::now();
     let setup = setup(sc, overrides)?;
+    let mut collector_lines = crate::collector::scenario_collectors(&sc.file.collectors, &setup.terrain)?;
+    let n_user_collectors = collector_lines.len();
+    collector_lines.extend(extras.collectors.iter().cloned());
+    let collectors = crate::collector::CollectorSet::new(collector_lines, extras.zone.clone());
+    let mut collector_stats = crate::collector::CollectorStats::new(&collectors, setup.terrain.barriers.len());
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
     let n = setup.rock_count();
     let threads = overrides.threads.or(sc.file.simulation.threads).unwrap_or(0);
@@ -249,12 +295,20 @@ pub fn run_scenario(
         threads,
         128,
         |i| {
-            let mut track = (CellTrack::new(&frame), (i < n_paths).then(PathRecorder::default));
+            // The rock's size is needed only at collector crossings.
+            let size_m =
+                if collectors.collectors.is_empty() { 0.0 } else { 2.0 * setup.draw(i).0.body.equivalent_radius_m() };
+            let mut track = (
+                CellTrack::new(&frame),
+                ((i < n_paths).then(PathRecorder::default), crate::collector::CollectorTrack::new(&collectors, size_m)),
+            );
             let rec = setup.run_rock(i, &mut track);
-            (rec, track.0.into_visits(), track.1.map(|p| p.0))
+            (rec, track.0.into_visits(), track.1 .0.map(|p| p.0), track.1 .1.into_crossings())
         },
-        |i, (rec, visits, path): (RockRecord, _, Option<Vec<Sample>>)| {
+        |i, (rec, visits, path, crossings): (RockRecord, _, Option<Vec<Sample>>, crate::collector::RockCrossings)| {
             acc.add(&visits);
+            collector_stats.add(&crossings);
+            on_rock(&rec, &crossings);
             let o = &rec.outcome;
             let end = o.final_state.position_m;
             if o.stop_reason == StopReason::Stopped {
@@ -307,14 +361,8 @@ pub fn run_scenario(
     drop(csv);
 
     let mut outputs = vec!["endpoints.csv".to_string()];
-    let grids = hazard_grids(
-        &acc,
-        terrain,
-        &stopped_xy,
-        n,
-        bandwidth,
-        &sc.file.terrain.crs_epsg.map(crate::raster::Crs::epsg).unwrap_or_else(|| terrain.crs.clone()),
-    );
+    let crs = crate::terrain::frame::output_crs(sc.file.terrain.crs_epsg, &terrain.crs);
+    let grids = hazard_grids(&acc, terrain, &stopped_xy, n, bandwidth, &crs);
     for ((stem, _), grid) in RASTERS.iter().zip(&grids) {
         let name = format!("{stem}.tif");
         crate::io::geotiff::write_grid(&out_dir.join(&name), grid)?;
@@ -325,6 +373,18 @@ pub fn run_scenario(
         outputs.push("paths.csv".into());
         outputs.push("paths.vtk".into());
     }
+    let products = crate::report::RunProducts {
+        dir: out_dir,
+        scenario: sc,
+        terrain,
+        grids: &grids,
+        stopped_xy: &stopped_xy,
+        paths: &paths,
+        collectors: &collectors,
+        n_user_collectors,
+        collector_stats: &collector_stats,
+    };
+    outputs.extend(crate::report::write_run_products(&products)?);
     std::fs::rename(&endpoints_tmp, &endpoints_path).map_err(|e| Error::io(&endpoints_path, e))?;
 
     let wall = t0.elapsed().as_secs_f64();
@@ -373,13 +433,20 @@ pub fn run_scenario(
         rocks_per_second: n as f64 / wall.max(1e-9),
         outputs: {
             outputs.push("summary.json".into());
+            outputs.push("index.html".into());
             outputs
         },
+        collectors: crate::collector::facts::collector_facts(
+            &collectors.collectors[..n_user_collectors],
+            &collector_stats,
+        ),
+        barriers: crate::collector::facts::barrier_facts(&terrain.barriers, &collector_stats),
     };
     let json = serde_json::to_string_pretty(&summary)
         .map_err(|e| Error::invalid("summary.json", e.to_string(), "report this as a bug"))?;
     crate::io::write_bytes_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
-    Ok(summary)
+    crate::report::write_run_index(&products, &summary)?;
+    Ok(RunOutput { summary, grids, terrain: setup.terrain.clone(), collectors, collector_stats })
 }
 
 /// The six hazard rasters (in [`RASTERS`] order). Cells off the terrain are nodata; on the terrain, probabilities

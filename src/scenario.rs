@@ -62,6 +62,15 @@ pub struct ScenarioFile {
     /// Barriers standing on the terrain.
     #[serde(default)]
     pub barriers: Vec<BarrierSpec>,
+    /// Data collector lines ([`crate::collector`]).
+    #[serde(default)]
+    pub collectors: Vec<crate::collector::CollectorSpec>,
+    /// Hazard zone thresholds ([`crate::zones`]).
+    #[serde(default)]
+    pub hazard_zones: crate::zones::ZoneSettings,
+    /// Settings of `talus barrier` ([`crate::barrier`]).
+    #[serde(default)]
+    pub barrier_design: crate::barrier::DesignSpec,
 }
 
 /// `[[barriers]]`: a flexible barrier (fence) in the simulation.
@@ -274,13 +283,15 @@ pub struct OutputSpec {
     pub cell_size_m: f64,
     /// Kernel radius of the end-point density, m (default: 2 cells).
     pub endpoint_bandwidth_m: Option<f64>,
-    /// Paths of this many rocks (the first ones) as CSV and VTK (default: 0).
+    /// Paths of this many rocks (the first ones) as CSV, VTK and GeoJSON (default: 0).
     pub paths: usize,
+    /// Also write every raster as an ESRI ASCII grid (`.asc`, with `.prj` when the CRS WKT is known).
+    pub ascii_grids: bool,
 }
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        OutputSpec { cell_size_m: 2.0, endpoint_bandwidth_m: None, paths: 0 }
+        OutputSpec { cell_size_m: 2.0, endpoint_bandwidth_m: None, paths: 0, ascii_grids: false }
     }
 }
 
@@ -445,6 +456,11 @@ impl ScenarioFile {
                 s.campaign = Some(dir);
             }
         }
+        for (i, c) in file.collectors.iter_mut().enumerate() {
+            c.check(&f(&format!("collectors[{i}]")), base)?;
+        }
+        file.hazard_zones.check(&f("hazard_zones"))?;
+        file.barrier_design.check(&f("barrier_design"))?;
         let this = file;
         let shapes = match &this.rocks {
             Some(r) => r.check(&f("rocks"), base)?,

@@ -1,5 +1,6 @@
 //! Command-line arguments (clap) and their dispatch. The library never sees clap types.
 
+mod barrier;
 mod benches;
 mod mesh;
 mod profile;
@@ -24,6 +25,7 @@ enum Command {
     Benches(benches::BenchesArgs),
     Section(section::SectionArgs),
     Mesh(mesh::MeshArgs),
+    Barrier(barrier::BarrierArgs),
 }
 
 /// Parses the command line and runs the command.
@@ -43,5 +45,6 @@ pub fn main() -> anyhow::Result<()> {
         Command::Benches(a) => benches::run(a),
         Command::Section(a) => section::run(a),
         Command::Mesh(a) => mesh::run(a),
+        Command::Barrier(a) => barrier::run(a),
     }
 }

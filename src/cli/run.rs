@@ -7,11 +7,14 @@ use std::path::PathBuf;
 use talus::run::{run_scenario, RunOverrides};
 use talus::scenario::ScenarioFile;
 
-/// Run a 3D rigid-body rockfall scenario and write end points, hazard rasters and a run manifest.
+/// Run a 3D rigid-body rockfall scenario and write end points, hazard rasters (GeoTIFF, PNG maps), hazard zones,
+/// collector tables, a run manifest and index.html.
 ///
 /// Example:
 ///   talus run examples/bench_stack.toml --out outputs/bench_stack --rocks 500 --seed 7
+///   talus run examples/tyrol.toml --out outputs/tyrol --paths 50 --ascii-grids
 #[derive(Debug, Args)]
+#[command(verbatim_doc_comment)]
 pub struct RunArgs {
     /// Scenario file (TOML; see README.md for every key).
     scenario: PathBuf,
@@ -27,9 +30,12 @@ pub struct RunArgs {
     /// Threads (default: all cores). Results do not depend on it.
     #[arg(long)]
     threads: Option<usize>,
-    /// Also write the paths of the first N rocks (paths.csv and paths.vtk).
+    /// Also write the paths of the first N rocks (paths.csv, paths.vtk and paths.geojson).
     #[arg(long)]
     paths: Option<usize>,
+    /// Also write every raster as an ESRI ASCII grid (.asc, with .prj when the CRS WKT is known).
+    #[arg(long)]
+    ascii_grids: bool,
 }
 
 pub fn run(a: RunArgs) -> anyhow::Result<()> {
@@ -39,7 +45,8 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     if a.threads == Some(0) {
         anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)");
     }
-    let sc = ScenarioFile::read(&a.scenario)?.resolve(&a.scenario)?;
+    let mut sc = ScenarioFile::read(&a.scenario)?.resolve(&a.scenario)?;
+    sc.file.output.ascii_grids |= a.ascii_grids;
     let overrides = RunOverrides { rocks: a.rocks, seed: a.seed, threads: a.threads, paths: a.paths };
     let pb = progress::bar(0, "rocks");
     let progress = |done: usize, total: usize| {
@@ -67,6 +74,24 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         "run-out median {:.1} m (P95 {:.1} m, max {:.1} m); largest kinetic energy P95 {:.1} kJ",
         summary.runout_m.p50, summary.runout_m.p95, summary.runout_m.max, summary.max_kinetic_kj.p95
     );
-    println!("wrote {} files to {}", summary.outputs.len(), a.out.display());
+    for b in &summary.barriers {
+        println!("barrier {}: {} rocks caught, {} broke through", b.name, b.caught, b.broke_through);
+    }
+    for c in &summary.collectors {
+        println!(
+            "collector {}: {} rocks crossed ({:.1} %), kinetic energy P95 {:.1} kJ, passing height P95 {:.2} m",
+            c.name,
+            c.rocks_crossing,
+            100.0 * c.fraction_crossing,
+            c.kinetic_kj_p95.unwrap_or(f64::NAN),
+            c.passing_height_m_p95.unwrap_or(f64::NAN)
+        );
+    }
+    println!(
+        "wrote {} files to {}; open {} to see them",
+        summary.outputs.len(),
+        a.out.display(),
+        a.out.join("index.html").display()
+    );
     Ok(())
 }

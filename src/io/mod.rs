@@ -2,6 +2,7 @@
 
 pub mod ascii_grid;
 pub mod atomic;
+pub mod geojson;
 pub mod geotiff;
 mod grid_check;
 pub mod obj;

@@ -174,6 +174,7 @@ impl BenchGeometry {
 impl BenchGeometry {
     /// The 3D mesh: the profile extruded over `lateral_width_m` in y (from 0), segments cut into pieces no longer
     /// than `max_edge_m`, triangles counter-clockwise seen from above, in groups `face` and `floor`.
+    #[allow(clippy::needless_range_loop)] // i indexes the stations and the vertex grid alike
     pub fn mesh(&self) -> crate::io::MeshData {
         let profile = self.profile();
         // Stations along x with their part (of the segment starting there).

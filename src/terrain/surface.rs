@@ -86,7 +86,7 @@ impl Surface {
             let (a, b, c) = (vertices[ia], vertices[ib], vertices[ic]);
             let n = (b - a).cross(&(c - a));
             let scale = (b - a).norm_squared().max((c - a).norm_squared()).max((c - b).norm_squared());
-            if n.norm() <= 1e-10 * scale || !n.iter().all(|v| v.is_finite()) {
+            if n.norm().is_nan() || n.norm() <= 1e-10 * scale || !n.iter().all(|v| v.is_finite()) {
                 stats.degenerate_dropped += 1;
                 continue;
             }

@@ -1,0 +1,370 @@
+//! Sizing each candidate from one run in which all candidates are collectors.
+//!
+//! **Protected zone.** With an asset line or polygon, a rock reaches the protected zone when it crosses the line
+//! or enters the polygon; a candidate can intercept it only if the rock crosses the candidate first. Without one,
+//! the protected zone of a candidate is the ground beyond it: a rock reaches it when it crosses the candidate line
+//! (ours; the issue's "beyond the candidate"). Call R the number of rocks that reach the protected zone.
+//!
+//! **Length.** Each rock that reaches the zone is counted in the stretch where it first crosses the candidate (if it
+//! does, before reaching the zone). The proposed barrier is the shortest run of whole consecutive stretches (wrapping
+//! round on closed lines) holding at least `target_share` × R of them (two pointers over the stretches). A barrier
+//! there meets at least those rocks; it may meet more (rocks that first cross the line elsewhere and then cross the
+//! barrier), so the share is a lower bound. If the whole line holds fewer, the barrier covers every stretch with such
+//! rocks and the share reached is reported.
+//!
+//! **Design values** over the rocks crossing the barrier's stretches (each rock's first crossing of each stretch):
+//! design height = P95 of the passing height of the lowest point + P95 of the rock size (the diameter of the sphere
+//! of the rock's volume), so that a P95 rock passes the fence below its top with a whole rock to spare (ours, after
+//! the issue: "P95 passing height plus the rock's size"); the fence height is that rounded up to 0.5 m (ours).
+//! Design energy: P95 (default), P99 or maximum of the total kinetic energy, which picks the smallest energy class
+//! that takes it ([`super::classes`]). Cost = length × cost per metre of the class.
+//!
+//! **Ranking** (ours). A proposal should, in this order of importance, meet the target share; be buildable (a
+//! standard class, and a fence no higher than `max_fence_height_m`); and intercept at least `min_share_of_released`
+//! of all released rocks. Sized candidates are ranked by whether they meet the target, then by how many of the two
+//! buildability criteria they miss, then by whether they meet the share, then by cost (then length); each missed
+//! criterion is written in the `note` column. Candidates with fewer than `min_rocks` rocks reaching their zone are
+//! listed but not sized (too few to estimate a P95).
+
+use super::candidates::{Candidate, CandidateKind};
+use super::classes::{class_for, class_label, cost};
+use super::settings::{ClassEnergy, DesignSpec};
+use crate::collector::{Collector, CollectorStats, Quantity, RockCrossings};
+use serde::Serialize;
+
+/// Per-stretch counts of the rocks that reach each candidate's protected zone, gathered rock by rock.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tally {
+    /// Index of the first candidate among the run's collectors.
+    pub offset: usize,
+    /// Whether an asset zone is tracked (else each candidate's zone is beyond it).
+    pub asset_zone: bool,
+    /// Rocks seen.
+    pub rocks: u64,
+    /// Rocks that reached the asset zone.
+    pub zone_reached: u64,
+    /// Per candidate, per stretch: rocks reaching the zone whose first crossing of the candidate is there.
+    pub targeted: Vec<Vec<u32>>,
+    /// Per candidate: rocks crossing it.
+    pub crossing: Vec<u64>,
+}
+
+impl Tally {
+    /// An empty tally for `candidates` (collectors `offset..` of the run).
+    pub fn new(candidates: &[Collector], offset: usize, asset_zone: bool) -> Self {
+        Tally {
+            offset,
+            asset_zone,
+            rocks: 0,
+            zone_reached: 0,
+            targeted: candidates.iter().map(|c| vec![0; c.stretch_count()]).collect(),
+            crossing: vec![0; candidates.len()],
+        }
+    }
+
+    /// Adds a rock; `candidates` are the candidate collectors (the run's collectors from `offset` on).
+    pub fn add(&mut self, r: &RockCrossings, candidates: &[Collector]) {
+        self.rocks += 1;
+        if r.zone_t_s.is_some() {
+            self.zone_reached += 1;
+        }
+        for (c, x) in &r.line_first {
+            let Some(k) = (*c as usize).checked_sub(self.offset) else { continue };
+            if k >= self.targeted.len() {
+                continue;
+            }
+            self.crossing[k] += 1;
+            let reaches = if self.asset_zone { r.zone_t_s.is_some_and(|t| x.t_s <= t) } else { true };
+            if reaches {
+                let s = candidates[k].stretch_of(x.along_m);
+                self.targeted[k][s] += 1;
+            }
+        }
+    }
+
+    /// Rocks that reach the protected zone of candidate `k`.
+    pub fn reaching(&self, k: usize) -> u64 {
+        if self.asset_zone {
+            self.zone_reached
+        } else {
+            self.crossing[k]
+        }
+    }
+}
+
+/// What became of a candidate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// Sized; see the values.
+    Sized,
+    /// Fewer than `min_rocks` rocks reach its protected zone.
+    TooFewRocks,
+}
+
+/// A sized (or not) candidate.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Assessment {
+    /// Index into the candidate list.
+    pub candidate: usize,
+    /// Name.
+    pub name: String,
+    /// Where it comes from.
+    pub kind: CandidateKind,
+    /// Rank among the proposals (1 = best), if ranked.
+    pub rank: Option<usize>,
+    /// Sized or not.
+    pub status: Status,
+    /// Length of the whole candidate line, m.
+    pub candidate_length_m: f64,
+    /// Rocks reaching the protected zone (R).
+    pub rocks_reaching: u64,
+    /// Start and end of the proposed barrier along the candidate, m.
+    pub from_m: f64,
+    /// End along the candidate, m.
+    pub to_m: f64,
+    /// Barrier length, m.
+    pub length_m: f64,
+    /// Rocks of R intercepted (lower bound).
+    pub intercepted: u64,
+    /// Intercepted / R.
+    pub share: f64,
+    /// Intercepted / all rocks released.
+    pub share_of_released: f64,
+    /// Meets the target share.
+    pub meets_target: bool,
+    /// Rocks crossing the barrier's stretches.
+    pub rocks_crossing: u64,
+    /// P95 passing height, m.
+    pub passing_height_p95_m: f64,
+    /// Largest passing height, m.
+    pub passing_height_max_m: f64,
+    /// P95 rock size, m.
+    pub rock_size_p95_m: f64,
+    /// Design height (P95 passing height + P95 rock size), m.
+    pub design_height_m: f64,
+    /// Fence height: the design height rounded up to 0.5 m.
+    pub fence_height_m: f64,
+    /// P95 of the total kinetic energy, kJ.
+    pub energy_p95_kj: f64,
+    /// P99, kJ.
+    pub energy_p99_kj: f64,
+    /// Largest, kJ.
+    pub energy_max_kj: f64,
+    /// P95 speed, m/s.
+    pub speed_p95_mps: f64,
+    /// Median crossing angle, degrees.
+    pub crossing_angle_p50_deg: f64,
+    /// Energy class index (`None`: above the largest).
+    #[serde(skip)]
+    pub class: Option<usize>,
+    /// Energy class, kJ (`None`: above the largest class).
+    pub class_kj: Option<f64>,
+    /// Energy class as written.
+    pub class_label: String,
+    /// Cost (length × class cost per metre); `None` above the largest class.
+    pub cost: Option<f64>,
+    /// Why it is not ranked first, or other remarks.
+    pub note: String,
+    /// The proposed barrier line (local frame).
+    #[serde(skip)]
+    pub line_m: Vec<[f64; 2]>,
+}
+
+/// The shortest run of consecutive stretches (start, count) whose counts add up to `need` (circular if `closed`),
+/// by length; `None` if no run does.
+pub fn shortest_run(counts: &[u32], lengths: &[f64], need: u64, closed: bool) -> Option<(usize, usize)> {
+    let n = counts.len();
+    if n == 0 || need == 0 {
+        return None;
+    }
+    let limit = if closed { 2 * n } else { n };
+    let at = |k: usize| k % n;
+    let mut best: Option<(f64, usize, usize)> = None;
+    let (mut end, mut sum, mut len) = (0usize, 0u64, 0.0f64);
+    for start in 0..n {
+        if end < start {
+            end = start;
+            sum = 0;
+            len = 0.0;
+        }
+        while sum < need && end < limit && end - start < n {
+            sum += counts[at(end)] as u64;
+            len += lengths[at(end)];
+            end += 1;
+        }
+        if sum >= need && best.is_none_or(|(l, _, _)| len < l - 1e-9) {
+            best = Some((len, start, end - start));
+        }
+        sum -= counts[at(start)] as u64;
+        len -= lengths[at(start)];
+    }
+    best.map(|(_, s, c)| (s, c))
+}
+
+/// Sizes every candidate and ranks them.
+pub fn assess(
+    candidates: &[Candidate],
+    collectors: &[Collector],
+    stats: &CollectorStats,
+    tally: &Tally,
+    spec: &DesignSpec,
+) -> Vec<Assessment> {
+    let n_released = tally.rocks.max(1) as f64;
+    let mut out: Vec<Assessment> = candidates
+        .iter()
+        .enumerate()
+        .map(|(k, cand)| {
+            let ci = tally.offset + k;
+            let col = &collectors[ci];
+            let r = tally.reaching(k);
+            let mut a = Assessment {
+                candidate: k,
+                name: cand.name.clone(),
+                kind: cand.kind,
+                rank: None,
+                status: Status::TooFewRocks,
+                candidate_length_m: col.length_m(),
+                rocks_reaching: r,
+                from_m: 0.0,
+                to_m: 0.0,
+                length_m: 0.0,
+                intercepted: 0,
+                share: 0.0,
+                share_of_released: 0.0,
+                meets_target: false,
+                rocks_crossing: 0,
+                passing_height_p95_m: f64::NAN,
+                passing_height_max_m: f64::NAN,
+                rock_size_p95_m: f64::NAN,
+                design_height_m: f64::NAN,
+                fence_height_m: f64::NAN,
+                energy_p95_kj: f64::NAN,
+                energy_p99_kj: f64::NAN,
+                energy_max_kj: f64::NAN,
+                speed_p95_mps: f64::NAN,
+                crossing_angle_p50_deg: f64::NAN,
+                class: None,
+                class_kj: None,
+                class_label: String::new(),
+                cost: None,
+                note: String::new(),
+                line_m: Vec::new(),
+            };
+            let targeted = &tally.targeted[k];
+            let total: u64 = targeted.iter().map(|&c| c as u64).sum();
+            if r < spec.min_rocks.max(1) as u64 || total == 0 {
+                a.note = format!("{r} rocks reach its protected zone (fewer than {})", spec.min_rocks.max(1));
+                return a;
+            }
+            let need = ((spec.target_share * r as f64 - 1e-9).ceil() as u64).max(1);
+            let lengths: Vec<f64> =
+                (0..col.stretch_count()).map(|s| col.stretch_span_m(s)).map(|(a, b)| b - a).collect();
+            let (start, count) = match shortest_run(targeted, &lengths, need.min(total), col.is_closed()) {
+                Some(run) => run,
+                None => (0, col.stretch_count()),
+            };
+            let stretches: Vec<usize> = (start..start + count).map(|s| s % col.stretch_count()).collect();
+            let intercepted: u64 = stretches.iter().map(|&s| targeted[s] as u64).sum();
+            let wraps = start + count > col.stretch_count();
+            let (from, to) =
+                (col.stretch_span_m(start).0, col.stretch_span_m((start + count - 1) % col.stretch_count()).1);
+            a.line_m = if wraps {
+                let mut l = col.sub_line(from, col.length_m());
+                l.extend(col.sub_line(0.0, to).into_iter().skip(1));
+                l
+            } else {
+                col.sub_line(from, to)
+            };
+            a.from_m = from;
+            a.to_m = to;
+            a.length_m = lengths.iter().enumerate().filter(|(s, _)| stretches.contains(s)).map(|(_, l)| l).sum();
+            a.status = Status::Sized;
+            a.intercepted = intercepted;
+            a.share = intercepted as f64 / r as f64;
+            a.share_of_released = intercepted as f64 / n_released;
+            a.meets_target = intercepted >= need;
+            let d = stats.stretch_range_dists(ci, stretches.iter().copied());
+            a.rocks_crossing = d.count() as u64;
+            a.passing_height_p95_m = d.quantile(Quantity::Height, 0.95);
+            a.passing_height_max_m = d.max(Quantity::Height);
+            a.rock_size_p95_m = d.quantile(Quantity::Size, 0.95);
+            a.design_height_m = a.passing_height_p95_m + a.rock_size_p95_m;
+            a.fence_height_m = (a.design_height_m / 0.5).ceil() * 0.5;
+            a.energy_p95_kj = d.quantile(Quantity::Kinetic, 0.95);
+            a.energy_p99_kj = d.quantile(Quantity::Kinetic, 0.99);
+            a.energy_max_kj = d.max(Quantity::Kinetic);
+            a.speed_p95_mps = d.quantile(Quantity::Speed, 0.95);
+            a.crossing_angle_p50_deg = d.quantile(Quantity::Angle, 0.5);
+            let design_energy = match spec.class_energy {
+                ClassEnergy::P95 => a.energy_p95_kj,
+                ClassEnergy::P99 => a.energy_p99_kj,
+                ClassEnergy::Max => a.energy_max_kj,
+            };
+            a.class = class_for(design_energy, &spec.classes_kj);
+            a.class_kj = a.class.map(|c| spec.classes_kj[c]);
+            a.class_label = class_label(a.class, spec);
+            a.cost = cost(a.length_m, a.class, spec);
+            let mut notes = Vec::new();
+            if !a.meets_target {
+                notes.push(format!("intercepts {:.1} % < target {:.1} %", 100.0 * a.share, 100.0 * spec.target_share));
+            }
+            if a.share_of_released < spec.min_share_of_released {
+                notes.push(format!(
+                    "stops {:.1} % of all rocks (< {:.0} %)",
+                    100.0 * a.share_of_released,
+                    100.0 * spec.min_share_of_released
+                ));
+            }
+            if a.class.is_none() {
+                notes.push("energy above the largest class: consider a dam or another position".into());
+            }
+            if a.fence_height_m > spec.max_fence_height_m {
+                notes.push(format!("higher than a fence ({} m)", spec.max_fence_height_m));
+            }
+            a.note = notes.join("; ");
+            a
+        })
+        .collect();
+    // Criteria a proposal should meet, most important first: the target share; a standard class and a fence height
+    // that can be built; a useful share of all rocks. Candidates are ranked by what they miss, then by cost.
+    let missed = |a: &Assessment| {
+        let unbuildable = a.class.is_none() as u8 + (a.fence_height_m > spec.max_fence_height_m) as u8;
+        (!a.meets_target, unbuildable, a.share_of_released < spec.min_share_of_released)
+    };
+    let mut order: Vec<usize> = (0..out.len()).filter(|&i| out[i].status == Status::Sized).collect();
+    order.sort_by(|&i, &j| {
+        let (a, b) = (&out[i], &out[j]);
+        missed(a)
+            .cmp(&missed(b))
+            .then_with(|| match (a.cost, b.cost) {
+                (Some(x), Some(y)) => x.total_cmp(&y),
+                (Some(_), None) => std::cmp::Ordering::Less,
+                (None, Some(_)) => std::cmp::Ordering::Greater,
+                (None, None) => b.share.total_cmp(&a.share),
+            })
+            .then(a.length_m.total_cmp(&b.length_m))
+            .then(i.cmp(&j))
+    });
+    for (r, &i) in order.iter().enumerate() {
+        out[i].rank = Some(r + 1);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shortest_runs_open_and_closed() {
+        let l = vec![5.0; 6];
+        assert_eq!(shortest_run(&[0, 3, 0, 5, 1, 0], &l, 6, false), Some((3, 2)));
+        assert_eq!(shortest_run(&[0, 3, 0, 5, 1, 0], &l, 9, false), Some((1, 4)));
+        assert_eq!(shortest_run(&[0, 3, 0, 5, 1, 0], &l, 10, false), None);
+        assert_eq!(shortest_run(&[4, 0, 0, 0, 0, 5], &l, 9, false), Some((0, 6)));
+        assert_eq!(shortest_run(&[4, 0, 0, 0, 0, 5], &l, 9, true), Some((5, 2)));
+        // Shorter last stretch wins a tie in counts.
+        assert_eq!(shortest_run(&[2, 0, 2], &[5.0, 5.0, 1.0], 2, false), Some((2, 1)));
+    }
+}

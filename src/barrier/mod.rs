@@ -1,0 +1,139 @@
+//! `talus barrier`: where to put a rockfall barrier, how long, how high and of which energy class, and what still
+//! passes with it in place.
+//!
+//! 1. Candidate lines from the terrain ([`candidates`]): contour lines across the run-out zone, bench crests and
+//!    toes of a pit, offsets of a toe or asset line.
+//! 2. One run of the scenario with every candidate as a collector line (written to `DIR/without_barrier/`, a full
+//!    `talus run` folder whose `collectors.csv` holds every candidate's stretches).
+//! 3. Each candidate sized and ranked ([`design`]): length to intercept the target share of the rocks that would
+//!    reach the protected zone, design height, design energy and class, cost.
+//! 4. The best proposal put in the scenario as a barrier and the scenario run again with the same rocks
+//!    (`DIR/with_barrier/`), and the residual compared with the run without it ([`residual`]).
+//! 5. Tables, GeoJSON, maps and `DIR/index.html` ([`report`]).
+
+pub mod candidates;
+pub mod classes;
+pub mod contour;
+pub mod design;
+pub mod grid;
+pub mod report;
+pub mod residual;
+pub mod settings;
+
+pub use candidates::{Candidate, CandidateKind};
+pub use design::{Assessment, Status};
+pub use residual::Residual;
+pub use settings::{ClassEnergy, DesignSpec};
+
+use crate::collector::{Collector, ProtectedZone};
+use crate::error::{Error, Result};
+use crate::run::{load_terrain, run_scenario_with, RunExtras, RunOutput, RunOverrides};
+use crate::scenario::{BarrierSpec, Scenario};
+use crate::terrain::frame::local_to_horizontal;
+use crate::terrain::{horizontal_to_local, Terrain};
+use std::path::Path;
+
+/// Everything `talus barrier` found.
+#[derive(Debug, Clone)]
+pub struct BarrierStudy {
+    /// The candidate lines.
+    pub candidates: Vec<Candidate>,
+    /// Their assessments, in candidate order (see `rank`).
+    pub assessments: Vec<Assessment>,
+    /// The run without the barrier (candidates as collectors).
+    pub without: RunOutput,
+    /// The run with the best proposal in place, if it was run.
+    pub with: Option<RunOutput>,
+    /// The residual, if re-run.
+    pub residual: Option<Residual>,
+    /// The barrier put in the scenario for the re-run (horizontal frame of the terrain files).
+    pub barrier: Option<BarrierSpec>,
+    /// Files written into the study folder (not counting the two run folders).
+    pub outputs: Vec<String>,
+}
+
+impl BarrierStudy {
+    /// The assessments ranked, best first.
+    pub fn ranked(&self) -> Vec<&Assessment> {
+        let mut r: Vec<&Assessment> = self.assessments.iter().filter(|a| a.rank.is_some()).collect();
+        r.sort_by_key(|a| a.rank);
+        r
+    }
+}
+
+/// The protected zone of the settings, in the local frame.
+pub fn protected_zone(spec: &DesignSpec, terrain: &Terrain) -> Option<ProtectedZone> {
+    let local = |pts: &[[f64; 2]]| pts.iter().map(|p| horizontal_to_local(terrain.up, &terrain.origin, *p)).collect();
+    if !spec.asset_line.is_empty() {
+        Some(ProtectedZone::Line(local(&spec.asset_line)))
+    } else if !spec.asset_polygon.is_empty() {
+        Some(ProtectedZone::Polygon(local(&spec.asset_polygon)))
+    } else {
+        None
+    }
+}
+
+/// Runs the whole study into `out_dir`. `stage` is told what is being done; `progress` gets rocks done / total.
+pub fn propose(
+    sc: &Scenario,
+    overrides: &RunOverrides,
+    out_dir: &Path,
+    stage: &dyn Fn(&str),
+    progress: &dyn Fn(usize, usize),
+) -> Result<BarrierStudy> {
+    let spec = &sc.file.barrier_design;
+    let terrain = load_terrain(sc)?;
+    stage("finding candidate lines");
+    let candidates = candidates::candidates(&terrain, spec, sc.file.output.cell_size_m);
+    if candidates.is_empty() {
+        return Err(Error::invalid(
+            format!("{}: barrier_design", sc.path.display()),
+            "no candidate line was found on the terrain",
+            "give a toe_line or asset_line with offsets_m, a smaller contour_interval_m, or a larger max_slope_deg",
+        ));
+    }
+    let zone = protected_zone(spec, &terrain);
+    let cand_cols: Vec<Collector> =
+        candidates.iter().map(|c| Collector::new(c.name.clone(), c.line_m.clone(), spec.segment_m)).collect();
+    let offset = crate::collector::scenario_collectors(&sc.file.collectors, &terrain)?.len();
+    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+
+    stage(&format!("running without a barrier, {} candidate lines as collectors", candidates.len()));
+    let mut tally = design::Tally::new(&cand_cols, offset, zone.is_some());
+    let extras = RunExtras { collectors: cand_cols.clone(), zone: zone.clone() };
+    let without =
+        run_scenario_with(sc, overrides, &out_dir.join("without_barrier"), progress, &extras, &mut |_, r| {
+            tally.add(r, &cand_cols)
+        })?;
+    let assessments =
+        design::assess(&candidates, &without.collectors.collectors, &without.collector_stats, &tally, spec);
+
+    let best = assessments.iter().filter(|a| a.rank.is_some()).min_by_key(|a| a.rank).cloned();
+    let (mut with, mut residual, mut barrier) = (None, None, None);
+    if let (Some(best), true) = (&best, spec.rerun) {
+        stage(&format!("running again with the proposed barrier on {}", best.name));
+        let b = BarrierSpec {
+            name: Some(format!("proposed: {}", best.name)),
+            line: best.line_m.iter().map(|p| local_to_horizontal(terrain.up, &terrain.origin, *p)).collect(),
+            height_m: best.fence_height_m,
+            capacity_kj: best.class_kj.unwrap_or(best.energy_max_kj.max(1.0)),
+        };
+        let mut sc2 = sc.clone();
+        sc2.file.barriers.push(b.clone());
+        let barrier_index = sc2.file.barriers.len() - 1;
+        let cand = cand_cols[best.candidate].clone();
+        let extras2 = RunExtras { collectors: vec![cand.clone()], zone: zone.clone() };
+        let mut res = Residual::new(tally.reaching(best.candidate), zone.is_some(), best.from_m, best.to_m);
+        let out =
+            run_scenario_with(&sc2, overrides, &out_dir.join("with_barrier"), progress, &extras2, &mut |_, r| {
+                res.add(r, offset as u32, barrier_index as u32)
+            })?;
+        with = Some(out);
+        residual = Some(res);
+        barrier = Some(b);
+    }
+    let mut study = BarrierStudy { candidates, assessments, without, with, residual, barrier, outputs: Vec::new() };
+    stage("writing tables, maps and index.html");
+    study.outputs = report::write_study(out_dir, sc, &terrain, &study)?;
+    Ok(study)
+}

@@ -1,0 +1,320 @@
+//! Barriers in the engine, candidate lines on the terrain, and the `talus barrier` study.
+
+use nalgebra::{UnitQuaternion, Vector3};
+use std::path::{Path, PathBuf};
+use talus::barrier::{candidates::candidates, propose, CandidateKind, DesignSpec, Status};
+use talus::collector::{Collector, CollectorSet, CollectorTrack};
+use talus::random::{stream, uniform, TruncNormal};
+use talus::rock::{RockBody, RockSize, ShapeKind};
+use talus::run::{load_terrain, RunOverrides};
+use talus::scenario::{Scenario, ScenarioFile};
+use talus::sim::{simulate, Barrier, BarrierHit, Observer, RigidState, Sample, SimParams, StopReason};
+use talus::terrain::{Material, Terrain};
+
+fn slope() -> Terrain {
+    let m = Material {
+        name: "m".into(),
+        cr: TruncNormal::fixed(0.35),
+        static_friction_deg: 30.0,
+        dynamic_friction_deg: 22.0,
+    };
+    // 35° plane falling towards +x.
+    let t = 35f64.to_radians().tan();
+    Terrain::from_function(200.0, 20, m, move |x, _| (200.0 - x) * t).unwrap()
+}
+
+/// Rock `i`: a cube or a smartie of 200–3000 kg released near the top at a random y, moving downslope.
+fn release(terrain: &Terrain, i: u64) -> (RockBody, RigidState) {
+    let mut rng = stream(99, i);
+    let kind = if i.is_multiple_of(2) { ShapeKind::Cube } else { ShapeKind::builtin("smartie").unwrap() };
+    let mass = 200.0 * 15f64.powf(uniform(&mut rng));
+    let r = RockBody::new(&kind, RockSize::Mass { mass_kg: mass, density_kg_m3: 2650.0 }, "rock").unwrap();
+    let (x, y) = (15.0 + 10.0 * uniform(&mut rng), 60.0 + 80.0 * uniform(&mut rng));
+    let z = terrain.surface.height(x, y).unwrap() + r.bounding_radius_m + 0.5;
+    let q =
+        UnitQuaternion::from_euler_angles(uniform(&mut rng) * 3.0, uniform(&mut rng) * 3.0, uniform(&mut rng) * 3.0);
+    let v = Vector3::new(4.0 + 6.0 * uniform(&mut rng), 4.0 * (uniform(&mut rng) - 0.5), 0.0);
+    (
+        r,
+        RigidState {
+            position_m: Vector3::new(x, y, z),
+            velocity_mps: v,
+            orientation: q,
+            omega_body_radps: Vector3::zeros(),
+        },
+    )
+}
+
+#[derive(Default)]
+struct Rec {
+    samples: Vec<Sample>,
+    hits: Vec<BarrierHit>,
+}
+
+impl Observer for Rec {
+    fn sample(&mut self, s: &Sample) {
+        self.samples.push(*s);
+    }
+    fn barrier(&mut self, h: &BarrierHit) {
+        self.hits.push(*h);
+    }
+}
+
+const LINE_X: f64 = 110.0;
+
+fn fence(height_m: f64, capacity_j: f64) -> Barrier {
+    Barrier { name: "fence".into(), line_m: vec![[LINE_X, -10.0], [LINE_X, 210.0]], height_m, capacity_j }
+}
+
+fn params() -> SimParams {
+    SimParams { max_time_s: 40.0, ..Default::default() }
+}
+
+#[test]
+fn a_straight_barrier_across_a_slope_intercepts_every_rock_that_crosses_it() {
+    let free = slope();
+    let mut fenced = slope();
+    fenced.barriers = vec![fence(1000.0, 1e15)];
+    let (mut crossing, mut not_crossing) = (0, 0);
+    for i in 0..24 {
+        let (r, start) = release(&free, i);
+        let mut a = Rec::default();
+        simulate(&free, &r, start, &params(), &mut stream(5, i), &mut a);
+        let crosses = a.samples.iter().any(|s| s.position_m.x > LINE_X);
+        let mut b = Rec::default();
+        let out = simulate(&fenced, &r, start, &params(), &mut stream(5, i), &mut b);
+        if crosses {
+            crossing += 1;
+            assert_eq!(out.stop_reason, StopReason::Barrier, "rock {i} crossed without the fence but was not caught");
+            assert_eq!(b.hits.len(), 1);
+            assert!(b.hits[0].caught);
+            assert!(
+                (out.final_state.position_m.x - LINE_X).abs() < 1e-6,
+                "rock {i} stopped at x = {}",
+                out.final_state.position_m.x
+            );
+            assert!(b.samples.iter().all(|s| s.position_m.x <= LINE_X + 1e-6), "rock {i} went past the fence");
+        } else {
+            not_crossing += 1;
+            assert!(b.hits.is_empty());
+            assert_eq!(a.samples.len(), b.samples.len(), "rock {i} never reached the fence, so nothing may change");
+        }
+    }
+    assert!(crossing >= 12, "{crossing} of 24 rocks reached the fence; the test needs most of them to");
+    eprintln!("{crossing} rocks crossed, {not_crossing} stopped above the fence");
+}
+
+#[test]
+fn capacity_stops_exactly_the_rocks_below_it() {
+    let free = slope();
+    let set = CollectorSet::new(vec![Collector::new("fence line", vec![[LINE_X, -10.0], [LINE_X, 210.0]], 5.0)], None);
+    // Energies at the fence with an unbreakable fence, and at the collector on the same line without one.
+    let mut unbreakable = slope();
+    unbreakable.barriers = vec![fence(1000.0, 1e15)];
+    let mut hits = Vec::new();
+    for i in 0..24 {
+        let (r, start) = release(&free, i);
+        let mut rec = Rec::default();
+        simulate(&unbreakable, &r, start, &params(), &mut stream(5, i), &mut rec);
+        let mut track = CollectorTrack::new(&set, 1.0);
+        simulate(&free, &r, start, &params(), &mut stream(5, i), &mut track);
+        let crossings = track.into_crossings();
+        if let Some(h) = rec.hits.first() {
+            let x = crossings.line_first.first().expect("the collector saw the rock cross").1;
+            // The collector interpolates between samples at most 0.5 m apart: within a few percent of the energy
+            // at the exact crossing.
+            assert!(
+                (x.kinetic_j / h.kinetic_j - 1.0).abs() < 0.1,
+                "rock {i}: collector {} J, barrier {} J",
+                x.kinetic_j,
+                h.kinetic_j
+            );
+            hits.push((i, h.kinetic_j));
+        }
+    }
+    assert!(hits.len() >= 12);
+    let mut energies: Vec<f64> = hits.iter().map(|h| h.1).collect();
+    energies.sort_by(f64::total_cmp);
+    let capacity = 0.5 * (energies[energies.len() / 2] + energies[energies.len() / 2 - 1]);
+    let mut limited = slope();
+    limited.barriers = vec![fence(1000.0, capacity)];
+    let (mut caught, mut through) = (0, 0);
+    for &(i, e) in &hits {
+        let (r, start) = release(&free, i);
+        let mut rec = Rec::default();
+        let out = simulate(&limited, &r, start, &params(), &mut stream(5, i), &mut rec);
+        let h = rec.hits.first().expect("same path up to the fence");
+        assert_eq!(h.kinetic_j, e, "rock {i}: the path up to the fence must not change");
+        assert_eq!(h.caught, e <= capacity, "rock {i}: {e} J against {capacity} J");
+        if h.caught {
+            caught += 1;
+            assert_eq!(out.stop_reason, StopReason::Barrier);
+        } else {
+            through += 1;
+            assert_ne!(out.stop_reason, StopReason::Barrier);
+            assert!(
+                rec.samples.iter().any(|s| s.position_m.x > LINE_X + 0.1),
+                "rock {i} broke through but did not go on"
+            );
+        }
+    }
+    assert!(caught > 0 && through > 0, "caught {caught}, through {through}");
+}
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn scenario(path: &Path) -> Scenario {
+    ScenarioFile::read(path).unwrap().resolve(path).unwrap()
+}
+
+#[test]
+fn bench_candidates_lie_on_the_terrain_at_their_level() {
+    let sc = scenario(&root().join("examples/bench_stack.toml"));
+    let terrain = load_terrain(&sc).unwrap();
+    let cands = candidates(&terrain, &DesignSpec::default(), sc.file.output.cell_size_m);
+    let oz = terrain.origin.z;
+    let mut crests = Vec::new();
+    let mut toes = Vec::new();
+    for c in &cands {
+        let level = match c.kind {
+            CandidateKind::BenchCrest { floor_m } => {
+                crests.push(floor_m.round() as i64);
+                floor_m - 0.25
+            }
+            CandidateKind::BenchToe { floor_m } => {
+                toes.push(floor_m.round() as i64);
+                floor_m + 0.25
+            }
+            _ => continue,
+        };
+        // Points every 0.25 m along the line are on the contour.
+        let mut worst: f64 = 0.0;
+        for w in c.line_m.windows(2) {
+            let n = ((w[1][0] - w[0][0]).hypot(w[1][1] - w[0][1]) / 0.25).ceil().max(1.0) as usize;
+            for k in 0..=n {
+                let f = k as f64 / n as f64;
+                let (x, y) = (w[0][0] + f * (w[1][0] - w[0][0]), w[0][1] + f * (w[1][1] - w[0][1]));
+                let z = terrain.surface.height(x, y).unwrap_or_else(|| panic!("{} ({x}, {y}) is not on the terrain", c.name)) + oz;
+                worst = worst.max((z - level).abs());
+            }
+        }
+        assert!(worst < 0.05, "{}: {worst} m off its level {level}", c.name);
+        assert!(
+            (talus::barrier::candidates::length(&c.line_m) - 100.0).abs() < 1.5,
+            "{} spans the stack's 100 m width",
+            c.name
+        );
+    }
+    crests.sort();
+    toes.sort();
+    assert_eq!(crests, vec![20, 40, 60, 80, 100, 120]);
+    assert_eq!(toes, vec![0, 20, 40, 60, 80, 100]);
+    assert!(cands.iter().any(|c| matches!(c.kind, CandidateKind::FloorOffset { offset_m } if offset_m == 10.0)));
+}
+
+#[test]
+fn tyrol_contour_candidates_follow_their_contour() {
+    let sc = scenario(&root().join("examples/tyrol.toml"));
+    let terrain = load_terrain(&sc).unwrap();
+    let cands = candidates(&terrain, &DesignSpec::default(), sc.file.output.cell_size_m);
+    let contours: Vec<_> = cands.iter().filter(|c| matches!(c.kind, CandidateKind::Contour { .. })).collect();
+    assert!(contours.len() >= 10);
+    for c in contours {
+        let CandidateKind::Contour { elevation_m } = c.kind else { unreachable!() };
+        for p in &c.line_m {
+            let z = terrain.surface.height(p[0], p[1]).unwrap() + terrain.origin.z;
+            assert!((z - elevation_m).abs() < 0.01, "{}: vertex at {z}", c.name);
+            let slope = terrain.surface.at(p[0], p[1]).unwrap().normal.z.acos().to_degrees();
+            assert!(slope <= 45.0 + 1e-9, "{}: vertex on a {slope}° slope", c.name);
+        }
+    }
+}
+
+fn small_bench_scenario(dir: &Path, extra: &str) -> PathBuf {
+    let mesh = root().join("meshes/bench_stack/bench_stack.obj");
+    let text = format!(
+        r#"title = "small bench stack"
+[terrain]
+files = ["{}"]
+materials_by = "group"
+crs_epsg = 2056
+[materials.face]
+preset = "face_all"
+[materials.floor]
+preset = "floor_all"
+[[sources]]
+type = "scatter"
+material = "face"
+within = [[10.0, 35.0], [21.6, 35.0], [21.6, 65.0], [10.0, 65.0]]
+count = 100
+[rocks]
+shapes = ["cube", "flat_box", "smartie"]
+mass_kg = [100.0, 10000.0]
+[output]
+cell_size_m = 2.0
+{extra}
+"#,
+        mesh.display()
+    );
+    let p = dir.join("scenario.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn barrier_study_ranks_sizes_reruns_and_does_not_depend_on_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = small_bench_scenario(dir.path(), "[barrier_design]\nmin_rocks = 10\nbest = 3\n");
+    let sc = scenario(&path);
+    let mut outs = Vec::new();
+    for threads in [1, 2] {
+        let out = dir.path().join(format!("study{threads}"));
+        let o = RunOverrides { threads: Some(threads), ..Default::default() };
+        let study = propose(&sc, &o, &out, &|_| {}, &|_, _| {}).unwrap();
+        outs.push((out, study));
+    }
+    let (out, study) = &outs[0];
+    for f in [
+        "index.html",
+        "proposals.csv",
+        "proposals.md",
+        "proposals.geojson",
+        "proposals.png",
+        "candidates.csv",
+        "candidates.geojson",
+        "barrier_study.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    for f in [
+        "without_barrier/index.html",
+        "without_barrier/collectors.csv",
+        "with_barrier/index.html",
+        "with_barrier/summary.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let a = std::fs::read_to_string(out.join("candidates.csv")).unwrap();
+    let b = std::fs::read_to_string(outs[1].0.join("candidates.csv")).unwrap();
+    assert_eq!(a, b, "results depend on the thread count");
+    let ranked = study.ranked();
+    let best = ranked.first().expect("a proposal");
+    assert_eq!(best.status, Status::Sized);
+    assert!(best.length_m > 0.0 && best.length_m <= best.candidate_length_m + 1e-9);
+    assert!(best.fence_height_m >= best.design_height_m && best.fence_height_m - best.design_height_m < 0.5 + 1e-9);
+    assert!(best.energy_p95_kj <= best.energy_max_kj);
+    if let Some(c) = best.class_kj {
+        assert!(best.energy_p95_kj <= c);
+    }
+    // The re-run keeps the same rocks and puts the proposal in place.
+    let r = study.residual.as_ref().expect("re-run");
+    assert_eq!(r.reaching_without, best.rocks_reaching);
+    assert!(r.reaching_with <= r.reaching_without);
+    assert_eq!(r.reaching_with, r.through + r.over + r.around + r.elsewhere);
+    let with = study.with.as_ref().unwrap();
+    assert_eq!(with.summary.barriers.len(), 1);
+    assert_eq!(with.summary.barriers[0].caught, r.caught);
+    assert_eq!(with.summary.rocks, study.without.summary.rocks);
+}
