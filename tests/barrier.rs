@@ -196,7 +196,11 @@ fn bench_candidates_lie_on_the_terrain_at_their_level() {
             for k in 0..=n {
                 let f = k as f64 / n as f64;
                 let (x, y) = (w[0][0] + f * (w[1][0] - w[0][0]), w[0][1] + f * (w[1][1] - w[0][1]));
-                let z = terrain.surface.height(x, y).unwrap_or_else(|| panic!("{} ({x}, {y}) is not on the terrain", c.name)) + oz;
+                let z = terrain
+                    .surface
+                    .height(x, y)
+                    .unwrap_or_else(|| panic!("{} ({x}, {y}) is not on the terrain", c.name))
+                    + oz;
                 worst = worst.max((z - level).abs());
             }
         }
