@@ -357,8 +357,12 @@ pub fn run_scenario_with(
         let _ = std::fs::remove_file(&endpoints_tmp);
         return Err(io_err(e));
     }
-    csv.flush().map_err(io_err)?;
+    if let Err(e) = csv.flush() {
+        let _ = std::fs::remove_file(&endpoints_tmp);
+        return Err(io_err(e));
+    }
     drop(csv);
+    std::fs::rename(&endpoints_tmp, &endpoints_path).map_err(|e| Error::io(&endpoints_path, e))?;
 
     let mut outputs = vec!["endpoints.csv".to_string()];
     let crs = crate::terrain::frame::output_crs(sc.file.terrain.crs_epsg, &terrain.crs);
@@ -385,7 +389,6 @@ pub fn run_scenario_with(
         collector_stats: &collector_stats,
     };
     outputs.extend(crate::report::write_run_products(&products)?);
-    std::fs::rename(&endpoints_tmp, &endpoints_path).map_err(|e| Error::io(&endpoints_path, e))?;
 
     let wall = t0.elapsed().as_secs_f64();
     let mut file = sc.file.clone();
