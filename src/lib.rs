@@ -9,6 +9,7 @@
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod calibrate;
 pub mod campaign;
 pub mod ensemble;
 pub mod hazard;

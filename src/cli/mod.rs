@@ -1,5 +1,6 @@
 //! Command-line arguments (clap) and their dispatch. The library never sees clap types.
 
+mod calibrate;
 mod mesh;
 mod progress;
 mod run;
@@ -18,6 +19,7 @@ struct Cli {
 enum Command {
     Run(run::RunArgs),
     Mesh(mesh::MeshArgs),
+    Calibrate(calibrate::CalibrateArgs),
 }
 
 /// Parses the command line and runs the command.
@@ -34,5 +36,6 @@ pub fn main() -> anyhow::Result<()> {
     match cli.command {
         Command::Run(a) => run::run(a),
         Command::Mesh(a) => mesh::run(a),
+        Command::Calibrate(a) => calibrate::run(a),
     }
 }
