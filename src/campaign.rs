@@ -149,8 +149,8 @@ impl Campaign {
     /// `block_metadata.csv` from `dir`.
     pub fn read(dir: &Path) -> Result<Campaign> {
         let rel = Table::read(&dir.join("release_points.csv"))?;
-        let (id, x, y, z, b) =
-            (rel.need("trajectory_id")?, rel.need("x_m")?, rel.need("y_m")?, rel.need("z_m")?, rel.need("block_id")?);
+        // `y_m` may be absent in a profile (2D) campaign: it is then 0.
+        let (id, x, z, b) = (rel.need("trajectory_id")?, rel.need("x_m")?, rel.need("z_m")?, rel.need("block_id")?);
         let mut releases = Vec::new();
         let mut seen = std::collections::BTreeSet::new();
         for row in &rel.rows {
@@ -166,7 +166,7 @@ impl Campaign {
             let v = |n: &str| rel.optional_number(row, n).map(|v| v.unwrap_or(0.0));
             releases.push(Release {
                 trajectory_id,
-                position_m: [rel.number(row, x, "x_m")?, rel.number(row, y, "y_m")?, rel.number(row, z, "z_m")?],
+                position_m: [rel.number(row, x, "x_m")?, v("y_m")?, rel.number(row, z, "z_m")?],
                 velocity_mps: [v("vx_mps")?, v("vy_mps")?, v("vz_mps")?],
                 spin_radps: [v("wx_radps")?, v("wy_radps")?, v("wz_radps")?],
                 block_id: rel.text(row, b, "block_id")?,
@@ -221,7 +221,7 @@ impl Campaign {
         let dep_path = dir.join("observed_deposition.csv");
         if dep_path.is_file() {
             let dep = Table::read(&dep_path)?;
-            let (id, x, y, z) = (dep.need("trajectory_id")?, dep.need("x_m")?, dep.need("y_m")?, dep.need("z_m")?);
+            let (id, x, z) = (dep.need("trajectory_id")?, dep.need("x_m")?, dep.need("z_m")?);
             for row in &dep.rows {
                 let tid = dep.text(row, id, "trajectory_id")?;
                 let Some(rel) = releases.iter().find(|r| r.trajectory_id == tid) else {
@@ -232,7 +232,7 @@ impl Campaign {
                         "fix the trajectory_id",
                     ));
                 };
-                let p = [dep.number(row, x, "x_m")?, dep.number(row, y, "y_m")?, dep.number(row, z, "z_m")?];
+                let p = [dep.number(row, x, "x_m")?, dep.optional_number(row, "y_m")?.unwrap_or(0.0), dep.number(row, z, "z_m")?];
                 let computed = ((p[0] - rel.position_m[0]).powi(2) + (p[1] - rel.position_m[1]).powi(2)).sqrt();
                 let runout_m = dep.optional_number(row, "observed_runout_m")?.unwrap_or(computed);
                 depositions.insert(tid.clone(), Deposition { trajectory_id: tid, position_m: p, runout_m });

@@ -10,6 +10,7 @@
 
 pub mod barrier;
 pub mod benches;
+pub mod calibrate;
 pub mod campaign;
 pub mod collector;
 pub mod ensemble;

@@ -2,6 +2,7 @@
 
 mod barrier;
 mod benches;
+mod calibrate;
 mod mesh;
 mod profile;
 mod progress;
@@ -26,6 +27,7 @@ enum Command {
     Section(section::SectionArgs),
     Mesh(mesh::MeshArgs),
     Barrier(barrier::BarrierArgs),
+    Calibrate(calibrate::CalibrateArgs),
 }
 
 /// Parses the command line and runs the command.
@@ -46,5 +48,6 @@ pub fn main() -> anyhow::Result<()> {
         Command::Section(a) => section::run(a),
         Command::Mesh(a) => mesh::run(a),
         Command::Barrier(a) => barrier::run(a),
+        Command::Calibrate(a) => calibrate::run(a),
     }
 }

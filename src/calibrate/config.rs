@@ -1,0 +1,479 @@
+//! The calibration settings file (TOML). Every key has a default, so an empty file (or none) is a sensible first
+//! try; unknown keys are errors that name the key.
+//!
+//! ```toml
+//! seed = 1
+//! repeats = 20              # simulations per run for the reported metrics
+//! search_repeats = 4        # per run inside the optimiser (common random numbers)
+//! holdout_fraction = 0.2    # seeded split when no --holdout file is given
+//! inner_folds = 5           # nested cross-validation of the effects loop
+//! outer_folds = 5           # talus calibrate --kfold without a number
+//!
+//! [materials.default]       # 3DRB: a number fixes a parameter, [min, max] frees it
+//! cr_mean = [0.02, 0.8]
+//! cr_sd = 0.05
+//! static_friction_deg = [10.0, 60.0]
+//! dynamic_friction_deg = { min = 5.0, max = 55.0, start = 28.0 }
+//!
+//! [effects]
+//! candidates = ["speed_restitution", "angle_restitution", "mass_restitution", "roughness",
+//!               "rolling_resistance", "soft_drag", "zone"]
+//! min_improvement = 0.05    # relative cut of the cross-validated run-out MAE to keep an effect
+//! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
+//! ```
+
+use crate::error::{Error, Result};
+use crate::lumped2d::Options2d;
+use crate::scenario::{MaterialsBy, ZoneSpec};
+use crate::sim::SimParams;
+use crate::terrain::UpAxis;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Which engine is calibrated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ModelKind {
+    /// The 3D rigid-body engine on a terrain surface.
+    #[serde(rename = "3drb")]
+    Rigid3d,
+    /// The 2D lumped-mass engine on a profile.
+    #[serde(rename = "2dlm")]
+    Lumped2d,
+}
+
+impl ModelKind {
+    /// `3drb` or `2dlm`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ModelKind::Rigid3d => "3drb",
+            ModelKind::Lumped2d => "2dlm",
+        }
+    }
+
+    /// Parses `3drb` or `2dlm`.
+    pub fn parse(s: &str) -> Result<ModelKind> {
+        match s.to_ascii_lowercase().as_str() {
+            "3drb" => Ok(ModelKind::Rigid3d),
+            "2dlm" => Ok(ModelKind::Lumped2d),
+            _ => Err(Error::invalid(
+                "--model",
+                format!("unknown model '{s}'"),
+                "use 3drb (rigid bodies on a terrain) or 2dlm (lumped masses on a profile)",
+            )),
+        }
+    }
+
+    /// The calibrated parameters of one material, in report order.
+    pub fn material_parameters(self) -> &'static [&'static str] {
+        match self {
+            ModelKind::Rigid3d => &["cr_mean", "cr_sd", "static_friction_deg", "dynamic_friction_deg"],
+            ModelKind::Lumped2d => &["rn_mean", "rn_sd", "rt_mean", "rt_sd", "friction_angle_deg", "roughness_sd_deg"],
+        }
+    }
+
+    /// Default setting of a material parameter: free with bounds and start, or fixed (ours; bounds span the
+    /// published ranges of physics.md §3 and the seed paper's Tables 1 and 2).
+    pub fn default_parameter(self, name: &str) -> ParamSetting {
+        let free = |min: f64, max: f64, start: f64| ParamSetting::Free { min, max, start: Some(start) };
+        match (self, name) {
+            (ModelKind::Rigid3d, "cr_mean") => free(0.02, 0.8, 0.3),
+            (ModelKind::Rigid3d, "cr_sd") => ParamSetting::Fixed(0.05),
+            (ModelKind::Rigid3d, "static_friction_deg") => free(10.0, 60.0, 35.0),
+            (ModelKind::Rigid3d, "dynamic_friction_deg") => free(5.0, 55.0, 28.0),
+            (ModelKind::Lumped2d, "rn_mean") => free(0.05, 0.8, 0.3),
+            (ModelKind::Lumped2d, "rn_sd") => ParamSetting::Fixed(0.05),
+            (ModelKind::Lumped2d, "rt_mean") => free(0.3, 0.99, 0.8),
+            (ModelKind::Lumped2d, "rt_sd") => ParamSetting::Fixed(0.05),
+            (ModelKind::Lumped2d, "friction_angle_deg") => free(5.0, 50.0, 25.0),
+            (ModelKind::Lumped2d, "roughness_sd_deg") => free(0.0, 10.0, 2.0),
+            _ => ParamSetting::Fixed(0.0),
+        }
+    }
+
+    /// Range a material parameter can take at all (for checking user bounds).
+    pub fn parameter_range(self, name: &str) -> (f64, f64) {
+        match name {
+            "cr_mean" | "cr_sd" | "rn_mean" | "rn_sd" | "rt_mean" | "rt_sd" => (0.0, 1.0),
+            "static_friction_deg" | "dynamic_friction_deg" | "friction_angle_deg" => (0.0, 89.0),
+            "roughness_sd_deg" => (0.0, 30.0),
+            _ => (f64::NEG_INFINITY, f64::INFINITY),
+        }
+    }
+}
+
+/// A parameter as written: a number (fixed), `[min, max]` (free, starting mid-range) or a table.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum ParamSetting {
+    /// Held at this value.
+    Fixed(f64),
+    /// Free within [min, max], starting at the middle.
+    Range([f64; 2]),
+    /// Free within [min, max], starting at `start` (default: the middle).
+    Free {
+        /// Lower bound.
+        min: f64,
+        /// Upper bound.
+        max: f64,
+        /// Starting value.
+        start: Option<f64>,
+    },
+}
+
+impl ParamSetting {
+    /// (min, max, start) if free.
+    pub fn bounds(&self) -> Option<(f64, f64, f64)> {
+        match *self {
+            ParamSetting::Fixed(_) => None,
+            ParamSetting::Range([a, b]) => Some((a, b, 0.5 * (a + b))),
+            ParamSetting::Free { min, max, start } => Some((min, max, start.unwrap_or(0.5 * (min + max)))),
+        }
+    }
+
+    /// The starting (or fixed) value.
+    pub fn start(&self) -> f64 {
+        match *self {
+            ParamSetting::Fixed(v) => v,
+            _ => self.bounds().map(|b| b.2).unwrap_or(0.0),
+        }
+    }
+}
+
+/// How the terrain's triangles (3DRB) get their materials, as in a scenario's `[terrain]` table.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TerrainMap {
+    /// Which axis is up in the terrain file (default: z).
+    pub up: UpAxis,
+    /// How triangles get their materials (default: single, all `default`).
+    pub materials_by: MaterialsBy,
+    /// With `materials_by = "slope"`: faces steeper than this are `face`, degrees (default 45).
+    pub slope_face_deg: Option<f64>,
+    /// Renames: group, material or file name → material name.
+    pub material_names: BTreeMap<String, String>,
+    /// Declared zones (polygons of another material).
+    pub zones: Vec<ZoneSpec>,
+}
+
+/// The objective the population fit minimises.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Objective {
+    /// Mean over runs of the CRPS of the run's simulated run-outs against its observed run-out (default: a proper
+    /// score that fits each run's predictive distribution, its median and its spread, and is the score the effects
+    /// loop cross-validates; see [`super::metrics::crps`]).
+    #[default]
+    Crps,
+    /// 1-Wasserstein distance between observed and simulated run-outs within each release group, averaged with
+    /// the groups' run counts as weights (physics.md §5).
+    W1Groups,
+    /// 1-Wasserstein distance over all runs pooled.
+    W1,
+    /// Mean over runs of |median simulated − observed run-out|.
+    Mae,
+}
+
+/// `[effects]`: the loop that adds missing effects.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct EffectsConfig {
+    /// Effects the loop may add (default: all that the model supports).
+    pub candidates: Vec<String>,
+    /// Smallest relative cut of the cross-validated run-out MAE that counts as an improvement (default 0.05).
+    pub min_improvement: f64,
+    /// Largest one-sided paired permutation p-value for keeping an effect (default 0.05).
+    pub alpha: f64,
+    /// Largest permutation p-value of a signature covariate (or of the deposition check for zones) for proposing
+    /// an effect (default 0.05; the cross-validation, not this, decides).
+    pub propose_alpha: f64,
+    /// Most effects proposed per round, strongest signature first (default 4).
+    pub max_proposals: usize,
+    /// Most rounds (default 3).
+    pub max_rounds: usize,
+    /// Permutations of the tests (default 999).
+    pub permutations: usize,
+    /// Largest optimiser evaluations when refitting after an effect is kept (default 30).
+    pub refit_evaluations: usize,
+    /// Largest optimiser evaluations of each fold's refit in the cross-validation that confirms a promising
+    /// effect (default 20; the refit starts from the fold's best grid setting).
+    pub cv_refit_evaluations: usize,
+}
+
+impl Default for EffectsConfig {
+    fn default() -> Self {
+        EffectsConfig {
+            candidates: Vec::new(),
+            min_improvement: 0.05,
+            alpha: 0.05,
+            propose_alpha: 0.05,
+            max_proposals: 4,
+            max_rounds: 3,
+            permutations: 999,
+            refit_evaluations: 30,
+            cv_refit_evaluations: 20,
+        }
+    }
+}
+
+/// `[back_analysis]`: per-run fits reported as mean ± sd.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BackAnalysisConfig {
+    /// Do it (default true).
+    pub enabled: bool,
+    /// Values tried across each parameter's bounds (default 7).
+    pub grid_points: usize,
+}
+
+impl Default for BackAnalysisConfig {
+    fn default() -> Self {
+        BackAnalysisConfig { enabled: true, grid_points: 7 }
+    }
+}
+
+/// All calibration settings.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct CalibrationConfig {
+    /// Seed of every random draw (default 1).
+    pub seed: u64,
+    /// Simulations per run for the reported metrics (default 20).
+    pub repeats: usize,
+    /// Simulations per run inside the optimiser and the effects loop (default 4). Common random numbers make the
+    /// comparison of candidates fair with few repeats; the objectives pool all repeats of a group.
+    pub search_repeats: usize,
+    /// Share of runs held out by the seeded split when no hold-out file is given (default 0.2).
+    pub holdout_fraction: f64,
+    /// Folds of the nested cross-validation inside the calibration runs (default 5).
+    pub inner_folds: usize,
+    /// Folds of `--kfold` when no number is given (default 5).
+    pub outer_folds: usize,
+    /// Runs of one block whose release points chain within this distance form one release group, m (default 20).
+    pub group_link_m: f64,
+    /// What the population fit minimises (default `crps`).
+    pub objective: Objective,
+    /// Most objective evaluations of the population fit (default 60).
+    pub max_evaluations: usize,
+    /// Threads (default 0: all cores). Results do not depend on it.
+    pub threads: usize,
+    /// Per material: parameter → fixed value or free range (defaults per model, see [`ModelKind`]).
+    pub materials: BTreeMap<String, BTreeMap<String, ParamSetting>>,
+    /// Material map of a 3DRB terrain.
+    pub terrain: TerrainMap,
+    /// 3DRB engine settings (its `effects` must stay empty: the loop adds effects).
+    pub simulation: SimParams,
+    /// 2DLM engine options.
+    pub options2d: Options2d,
+    /// The effects loop.
+    pub effects: EffectsConfig,
+    /// Per-run back-analysis.
+    pub back_analysis: BackAnalysisConfig,
+}
+
+impl Default for CalibrationConfig {
+    fn default() -> Self {
+        CalibrationConfig {
+            seed: 1,
+            repeats: 20,
+            search_repeats: 4,
+            holdout_fraction: 0.2,
+            inner_folds: 5,
+            outer_folds: 5,
+            group_link_m: 20.0,
+            objective: Objective::default(),
+            max_evaluations: 60,
+            threads: 0,
+            materials: BTreeMap::new(),
+            terrain: TerrainMap::default(),
+            simulation: SimParams::default(),
+            options2d: Options2d::default(),
+            effects: EffectsConfig::default(),
+            back_analysis: BackAnalysisConfig::default(),
+        }
+    }
+}
+
+impl CalibrationConfig {
+    /// Reads a settings file.
+    pub fn read(path: &Path) -> Result<CalibrationConfig> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Self::from_toml_str(&text, &path.display().to_string())
+    }
+
+    /// Parses settings from TOML text; `source` names it in errors.
+    pub fn from_toml_str(text: &str, source: &str) -> Result<CalibrationConfig> {
+        let cfg: CalibrationConfig = toml::from_str(text).map_err(|e| {
+            let line = e.span().map(|s| text[..s.start].lines().count().max(1));
+            let location = match line {
+                Some(l) => format!("{source}:{l}"),
+                None => source.to_string(),
+            };
+            Error::format(
+                location,
+                e.message().to_string(),
+                "see the calibration settings in docs/calibration.md; keys are case-sensitive",
+            )
+        })?;
+        cfg.validate(source)?;
+        Ok(cfg)
+    }
+
+    /// Checks ranges; `source` prefixes field names.
+    pub fn validate(&self, source: &str) -> Result<()> {
+        let f = |name: &str| format!("{source}: {name}");
+        if self.repeats < 3 {
+            return Err(Error::invalid(
+                f("repeats"),
+                format!("{} is too few for a 5–95 % interval", self.repeats),
+                "use 20 or more",
+            ));
+        }
+        if self.search_repeats == 0 || self.search_repeats > self.repeats {
+            return Err(Error::invalid(
+                f("search_repeats"),
+                format!("must be in [1, repeats = {}], got {}", self.repeats, self.search_repeats),
+                "use for example 4",
+            ));
+        }
+        if !(self.holdout_fraction > 0.0 && self.holdout_fraction < 0.9) {
+            return Err(Error::invalid(
+                f("holdout_fraction"),
+                format!("must be in (0, 0.9), got {}", self.holdout_fraction),
+                "use for example 0.2",
+            ));
+        }
+        if self.inner_folds < 2 || self.outer_folds < 2 {
+            return Err(Error::invalid(f("inner_folds / outer_folds"), "must be at least 2", "use for example 5"));
+        }
+        if !(self.group_link_m.is_finite() && self.group_link_m >= 0.0) {
+            return Err(Error::invalid(f("group_link_m"), "must be a non-negative distance", "use for example 20"));
+        }
+        if self.max_evaluations < 5 {
+            return Err(Error::invalid(f("max_evaluations"), "must be at least 5", "use for example 60"));
+        }
+        self.simulation.validate(&format!("{source}: simulation."))?;
+        if !self.simulation.effects.is_empty() {
+            return Err(Error::invalid(
+                f("simulation.effects"),
+                "effects are switched on in the settings",
+                "leave [simulation.effects] out: the calibration loop adds effects itself and reports them",
+            ));
+        }
+        self.options2d.validate(&format!("{source}: options2d."))?;
+        let e = &self.effects;
+        let in_range = (0.0..1.0).contains(&e.min_improvement)
+            && e.alpha > 0.0
+            && e.alpha <= 1.0
+            && e.propose_alpha > 0.0
+            && e.propose_alpha <= 1.0;
+        if !in_range {
+            return Err(Error::invalid(
+                f("effects"),
+                "min_improvement must be in [0, 1) and the alphas in (0, 1]",
+                "use 0.05, 0.05 and 0.05",
+            ));
+        }
+        if e.permutations < 99 {
+            return Err(Error::invalid(f("effects.permutations"), "must be at least 99", "use 999"));
+        }
+        if self.back_analysis.grid_points < 3 {
+            return Err(Error::invalid(f("back_analysis.grid_points"), "must be at least 3", "use 7"));
+        }
+        for (m, params) in &self.materials {
+            for (p, s) in params {
+                let field = f(&format!("materials.{m}.{p}"));
+                let values: Vec<f64> = match s {
+                    ParamSetting::Fixed(v) => vec![*v],
+                    _ => {
+                        let (a, b, st) = s.bounds().unwrap_or_default();
+                        if a.partial_cmp(&b) != Some(std::cmp::Ordering::Less) || st < a || st > b {
+                            return Err(Error::invalid(
+                                field,
+                                format!("bounds [{a}, {b}] with start {st} are not ordered"),
+                                "give min < max and a start between them",
+                            ));
+                        }
+                        vec![a, b, st]
+                    }
+                };
+                if values.iter().any(|v| !v.is_finite()) {
+                    return Err(Error::invalid(field, "is not a finite number", "give plain numbers"));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The setting of `param` of `material` for `model`: the file's, or the default.
+    pub fn setting(&self, model: ModelKind, material: &str, param: &str) -> ParamSetting {
+        self.materials
+            .get(material)
+            .and_then(|m| m.get(param))
+            .copied()
+            .unwrap_or_else(|| model.default_parameter(param))
+    }
+
+    /// Checks that every configured material and parameter exists for `model` with `materials` on the terrain.
+    pub fn check_materials(&self, model: ModelKind, materials: &[String], source: &str) -> Result<()> {
+        for (m, params) in &self.materials {
+            if !materials.contains(m) {
+                return Err(Error::invalid(
+                    format!("{source}: materials.{m}"),
+                    format!("the terrain has no material '{m}' (it has: {})", materials.join(", ")),
+                    "use one of the terrain's material names (a DEM has the single material `default`)",
+                ));
+            }
+            for (p, s) in params {
+                if !model.material_parameters().contains(&p.as_str()) {
+                    return Err(Error::invalid(
+                        format!("{source}: materials.{m}.{p}"),
+                        format!("'{p}' is not a {} material parameter", model.as_str()),
+                        format!("use one of: {}", model.material_parameters().join(", ")),
+                    ));
+                }
+                let (lo, hi) = model.parameter_range(p);
+                let (a, b) = match s.bounds() {
+                    Some((a, b, _)) => (a, b),
+                    None => (s.start(), s.start()),
+                };
+                if a < lo || b > hi {
+                    return Err(Error::invalid(
+                        format!("{source}: materials.{m}.{p}"),
+                        format!("[{a}, {b}] leaves the range [{lo}, {hi}]"),
+                        "narrow the bounds",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_parse_with_defaults_and_errors_name_the_key() {
+        let cfg = CalibrationConfig::from_toml_str(
+            "seed = 3\n[materials.default]\ncr_mean = [0.1, 0.5]\ncr_sd = 0.02\ndynamic_friction_deg = { min = 10.0, max = 40.0, start = 20.0 }\n",
+            "c.toml",
+        )
+        .unwrap();
+        assert_eq!(cfg.seed, 3);
+        assert_eq!(cfg.repeats, 20);
+        assert_eq!(cfg.setting(ModelKind::Rigid3d, "default", "cr_mean").bounds(), Some((0.1, 0.5, 0.3)));
+        assert_eq!(cfg.setting(ModelKind::Rigid3d, "default", "cr_sd"), ParamSetting::Fixed(0.02));
+        assert_eq!(cfg.setting(ModelKind::Rigid3d, "default", "dynamic_friction_deg").start(), 20.0);
+        let e = CalibrationConfig::from_toml_str("repeatz = 3\n", "c.toml").unwrap_err().to_string();
+        assert!(e.contains("c.toml:1") && e.contains("repeatz"), "{e}");
+        let e = CalibrationConfig::from_toml_str("[simulation.effects]\nroughness_m = 0.1\n", "c.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("simulation.effects"), "{e}");
+        let e = cfg.check_materials(ModelKind::Rigid3d, &["rock".into()], "c.toml").unwrap_err().to_string();
+        assert!(e.contains("materials.default"), "{e}");
+    }
+}

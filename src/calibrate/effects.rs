@@ -1,0 +1,196 @@
+//! The effects the base model lacks (physics.md §4), as the calibration loop sees them: what each one does, its
+//! formula and source, its parameter with the grid the loop tries, and the residual covariates that reveal it
+//! (its "signature", physics.md §4's last column).
+//!
+//! The formulas live in the engines ([`crate::sim::Effects`] for 3DRB, [`crate::lumped2d::Options2d`] for 2DLM);
+//! this file only describes them to the loop and the report.
+
+use super::config::ModelKind;
+use serde::{Deserialize, Serialize};
+
+/// An effect the loop can add.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EffectKind {
+    /// Restitution falling with impact speed.
+    SpeedRestitution,
+    /// Restitution depending on the impact angle.
+    AngleRestitution,
+    /// Restitution scaling with rock mass.
+    MassRestitution,
+    /// Ground roughness felt relative to rock size.
+    Roughness,
+    /// Rolling resistance.
+    RollingResistance,
+    /// Drag in soft ground on one material.
+    SoftDrag,
+    /// A zone of the terrain that behaves differently from its declared material.
+    Zone,
+    /// The CRSP tangential rule with spin (2DLM).
+    CrspRotation,
+}
+
+/// What the loop knows about an effect.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EffectDef {
+    /// Which effect.
+    pub kind: EffectKind,
+    /// Name in reports and settings.
+    pub name: &'static str,
+    /// Its parameter (`None` for an on/off effect).
+    pub param: Option<&'static str>,
+    /// Values the loop tries in the nested cross-validation.
+    pub grid: &'static [f64],
+    /// Bounds of the parameter when it is refitted.
+    pub bounds: (f64, f64),
+    /// Covariates whose correlation with the residuals points at it.
+    pub signature: &'static [&'static str],
+    /// Formula and source.
+    pub formula: &'static str,
+}
+
+/// Mobility factors every arm of the nested cross-validation may choose to re-centre the model (ours): steps of
+/// 1.2 on the log scale, up to ±44 % around the current fit.
+pub const MOBILITY_GRID: [f64; 5] = [1.0 / 1.44, 1.0 / 1.2, 1.0, 1.2, 1.44];
+
+/// Factors on every material's Cr that the arm of a restitution effect (speed, angle, mass) steps over instead of
+/// the mobility factor (ours): such an effect changes the meaning of Cr, which may have to move far.
+pub const CR_SCALE_GRID: [f64; 5] = [0.5, 0.7, 1.0, 1.4, 2.0];
+
+/// True for the effects that modify the restitution coefficient.
+pub fn is_restitution(kind: EffectKind) -> bool {
+    matches!(kind, EffectKind::SpeedRestitution | EffectKind::AngleRestitution | EffectKind::MassRestitution)
+}
+
+/// Zone mobility factors tried for a new zone, relative to the material it replaces (ours).
+pub const ZONE_MOBILITY_GRID: [f64; 4] = [0.2, 0.4, 0.7, 1.5];
+
+const SPEED_3D: EffectDef = EffectDef {
+    kind: EffectKind::SpeedRestitution,
+    name: "speed_restitution",
+    param: Some("k_mps"),
+    grid: &[3.0, 6.0, 12.0, 25.0],
+    bounds: (1.0, 60.0),
+    signature: &["release_height_m", "drop_height_m", "impact_speed_mean_mps", "impact_speed_max_mps", "initial_speed_mps"],
+    formula: "Cr' = Cr / (1 + (v_n/K)^2), v_n the normal approach speed (Pfeiffer & Bowen 1989, physics.md §3-4; their K = 9.144 m/s)",
+};
+
+const ANGLE_3D: EffectDef = EffectDef {
+    kind: EffectKind::AngleRestitution,
+    name: "angle_restitution",
+    param: Some("exponent"),
+    grid: &[-0.6, -0.3, 0.3, 0.6],
+    bounds: (-1.5, 1.5),
+    signature: &["impact_angle_mean_deg", "path_slope_mean_deg"],
+    formula: "Cr' = min(1, Cr (max(theta, 5 deg)/30 deg)^-a), theta the impact angle (after Wyllie 2014, e_n = 19.5 theta^-1.03; physics.md §4)",
+};
+
+const MASS_3D: EffectDef = EffectDef {
+    kind: EffectKind::MassRestitution,
+    name: "mass_restitution",
+    param: Some("exponent"),
+    grid: &[-0.6, -0.3, 0.3, 0.6],
+    bounds: (-1.5, 1.5),
+    signature: &["mass_kg", "size_m"],
+    formula: "Cr' = min(1, Cr (m/m_ref)^-beta), m_ref the campaign's median block mass (physics.md §8, f_m; RocFall's 'scale Rn by mass')",
+};
+
+const ROUGH_3D: EffectDef = EffectDef {
+    kind: EffectKind::Roughness,
+    name: "roughness",
+    param: Some("rough_m"),
+    grid: &[0.03, 0.08, 0.15, 0.3],
+    bounds: (0.0, 1.0),
+    signature: &["size_m", "mass_kg", "flatness", "elongation"],
+    formula:
+        "at each impact the normal tilts by U(0,1) atan(rough/R), R the equivalent radius (PlatRock, physics.md §4)",
+};
+
+const ROLL_3D: EffectDef = EffectDef {
+    kind: EffectKind::RollingResistance,
+    name: "rolling_resistance",
+    param: Some("mu_r"),
+    grid: &[0.05, 0.1, 0.2, 0.35],
+    bounds: (0.0, 1.0),
+    signature: &["gentle_fraction", "end_slope_deg", "path_slope_mean_deg"],
+    formula: "in contact the speed along the ground drops by mu_r g cos(alpha) per second (Azzoni et al. 1995, physics.md §4)",
+};
+
+const DRAG_3D: EffectDef = EffectDef {
+    kind: EffectKind::SoftDrag,
+    name: "soft_drag",
+    param: Some("rate_per_s"),
+    grid: &[0.3, 1.0, 3.0, 8.0],
+    bounds: (0.0, 30.0),
+    signature: &["path_fraction"],
+    formula: "in contact with the material, velocity and spin decay as exp(-c t) (a linear stand-in for RAMMS's scarring drag, Lu et al. 2019, physics.md §2)",
+};
+
+const ZONE: EffectDef = EffectDef {
+    kind: EffectKind::Zone,
+    name: "zone",
+    param: None,
+    grid: &ZONE_MOBILITY_GRID,
+    bounds: (0.0, 0.0),
+    signature: &["deposition_excess"],
+    formula: "a polygon (3DRB) or interval (2DLM) where observed runs stop and simulated ones do not, given its own fitted material (ours: derived from the residual and deposition maps)",
+};
+
+const SPEED_2D: EffectDef = EffectDef {
+    kind: EffectKind::SpeedRestitution,
+    name: "speed_restitution",
+    param: None,
+    grid: &[],
+    bounds: (0.0, 0.0),
+    signature: &[
+        "release_height_m",
+        "drop_height_m",
+        "impact_speed_mean_mps",
+        "impact_speed_max_mps",
+        "initial_speed_mps",
+    ],
+    formula:
+        "Rn' = Rn / (1 + (v_n/9.144 m/s)^2) (Pfeiffer & Bowen 1989, RocFall's 'scale Rn by velocity', physics.md §3)",
+};
+
+const CRSP_2D: EffectDef = EffectDef {
+    kind: EffectKind::CrspRotation,
+    name: "crsp_rotation",
+    param: None,
+    grid: &[],
+    bounds: (0.0, 0.0),
+    signature: &["mass_kg", "size_m", "path_slope_mean_deg"],
+    formula:
+        "CRSP tangential rule with spin: v_t' from Ff = Rt + (1-Rt)/(((v_t - wR)/6.096)^2 + 1.2) and SF (physics.md §4)",
+};
+
+/// The effects a model supports, in the order the loop considers them.
+pub fn effects_for(model: ModelKind) -> &'static [EffectDef] {
+    const D3: [EffectDef; 7] = [SPEED_3D, ANGLE_3D, MASS_3D, ROUGH_3D, ROLL_3D, DRAG_3D, ZONE];
+    const D2: [EffectDef; 3] = [SPEED_2D, CRSP_2D, ZONE];
+    match model {
+        ModelKind::Rigid3d => &D3,
+        ModelKind::Lumped2d => &D2,
+    }
+}
+
+/// The definition of `kind` for `model`.
+pub fn definition(model: ModelKind, kind: EffectKind) -> Option<&'static EffectDef> {
+    effects_for(model).iter().find(|d| d.kind == kind)
+}
+
+/// The definition named `name` for `model`.
+pub fn by_name(model: ModelKind, name: &str) -> Option<&'static EffectDef> {
+    effects_for(model).iter().find(|d| d.name == name)
+}
+
+/// Families of effects that one hidden cause can look like (used to say whether the loop named "the right
+/// effect"): restitution versus speed, versus size or mass, and place-bound effects.
+pub fn family(kind: EffectKind) -> &'static str {
+    match kind {
+        EffectKind::SpeedRestitution | EffectKind::AngleRestitution => "impact",
+        EffectKind::MassRestitution | EffectKind::Roughness | EffectKind::CrspRotation => "size",
+        EffectKind::RollingResistance => "rolling",
+        EffectKind::SoftDrag | EffectKind::Zone => "place",
+    }
+}

@@ -1,0 +1,751 @@
+//! The effects loop: diagnose the residuals of the current model on the calibration runs, propose the effects
+//! whose signature shows, test each by nested cross-validation inside the calibration runs, keep the best one if it
+//! clearly helps, refit, and repeat until nothing more helps.
+//!
+//! **Nested cross-validation** (ours, designed to cost a handful of model evaluations per effect): the
+//! calibration runs are split into `inner_folds` folds (stratified by release group). Each arm of the comparison
+//! has a small set of settings, every setting simulated once for all calibration runs with common random numbers:
+//! - the *baseline arm*: the current model re-centred by a global mobility factor m ∈ {1/1.44, 1/1.2, 1, 1.2,
+//!   1.44} ([`super::params::apply_mobility_3d`]);
+//! - an *effect arm*: the effect's parameter on its grid × the same mobility factors (so the effect is not
+//!   credited for a mere re-centring), or × Cr factors {0.5, 0.7, 1, 1.4, 2} for a restitution effect, which
+//!   changes what Cr means; for a zone, the polygon is derived from the training folds only and its
+//!   material's mobility is stepped over {0.2, 0.4, 0.7, 1.5}. A restitution effect is switched on *centred*:
+//!   every material's Cr is divided by the effect's factor at the current model's typical impact (median impact
+//!   speed, median impact angle; the mass effect is neutral at the median mass), so that the effect changes how
+//!   restitution varies, not its typical level (ours).
+//!
+//! In each fold, each arm picks the setting with the best objective on the other folds' runs, and the fold's own
+//! runs are predicted with it. That gives every calibration run an out-of-fold error under each arm: a cheap
+//! screening. The error is the run's CRPS (continuous ranked probability score, [`super::metrics::crps`]): a proper
+//! score in metres that reduces to |median − observed| for a sharp prediction and also credits a prediction whose
+//! spread matches the field scatter, which the run-out MAE alone cannot see (ours). An effect whose screening cuts
+//! the mean CRPS by at least `min_improvement` is then confirmed by a
+//! *refitting* cross-validation: in each fold, both arms start from the setting that fold chose and refit their
+//! free parameters (the base parameters, plus the effect's own; a zone's material alone) with the optimiser on the
+//! fold's training runs (`cv_refit_evaluations` evaluations), and predict the fold's runs. The decision uses the
+//! refitted errors.
+//!
+//! **"Clearly improves"** (ours): the out-of-fold mean CRPS falls by at least `min_improvement` (5 %) and a
+//! one-sided paired sign-flip permutation test on the per-run CRPS differences gives p ≤ `alpha` (0.05). Among
+//! the effects that pass, the one with the largest cut is kept, then refitted with the optimiser (together with
+//! the base parameters; a zone alone, as it is local), and the loop starts again.
+
+use super::config::ModelKind;
+use super::diagnose::{diagnose, Diagnostic};
+use super::effects::{
+    definition, effects_for, is_restitution, EffectDef, EffectKind, CR_SCALE_GRID, MOBILITY_GRID, ZONE_MOBILITY_GRID,
+};
+use super::fit::{fit, Context};
+use super::metrics::crps;
+use super::model::{Model, RunSims, Sim};
+use super::objective::{objective, objective_of};
+use super::params::{
+    apply_mobility_2d, apply_mobility_3d, fold_mobility, Candidate, EffectSpec, FreeParam, Region, MOBILITY,
+};
+use super::split::folds;
+use super::stats::{mean, paired_sign_flip_p};
+use super::zone::zone_check;
+use crate::random::stream;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// An effect the loop tried.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EffectTrial {
+    /// Round (1-based).
+    pub round: usize,
+    /// Effect name.
+    pub name: String,
+    /// Label in the parameters.
+    pub label: String,
+    /// The covariates (or the zone check) that proposed it.
+    pub proposed_by: Vec<Diagnostic>,
+    /// Grid screening: out-of-fold mean CRPS of the baseline arm, m.
+    pub grid_cv_crps_before_m: f64,
+    /// Grid screening: out-of-fold mean CRPS of the effect arm, m.
+    pub grid_cv_crps_after_m: f64,
+    /// Out-of-fold mean CRPS of the baseline arm (refitted in each fold when the screening was promising), m.
+    pub cv_crps_before_m: f64,
+    /// Out-of-fold mean CRPS of the effect arm (refitted likewise), m.
+    pub cv_crps_after_m: f64,
+    /// Out-of-fold run-out MAE of the baseline arm, m.
+    pub cv_runout_mae_before_m: f64,
+    /// Out-of-fold run-out MAE of the effect arm, m.
+    pub cv_runout_mae_after_m: f64,
+    /// 1 − CRPS after / CRPS before.
+    pub relative_improvement: f64,
+    /// One-sided paired permutation p-value.
+    pub p_value: f64,
+    /// Kept.
+    pub kept: bool,
+    /// The effect's parameters at the best setting on all calibration runs (before the refit).
+    pub parameters: BTreeMap<String, f64>,
+    /// The zone, if any.
+    pub region: Option<Region>,
+}
+
+/// An effect kept by the loop.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AddedEffect {
+    /// Effect name.
+    pub name: String,
+    /// Label in the parameters.
+    pub label: String,
+    /// Its parameters after the refit.
+    pub parameters: BTreeMap<String, f64>,
+    /// Why: the trial that kept it, with the formula and source.
+    pub evidence: serde_json::Value,
+    /// The zone, if any.
+    pub region: Option<Region>,
+}
+
+/// The loop's outcome.
+#[derive(Debug, Clone)]
+pub struct LoopResult {
+    /// The final model.
+    pub candidate: Candidate,
+    /// Effects kept, in order.
+    pub added: Vec<AddedEffect>,
+    /// Every trial.
+    pub trials: Vec<EffectTrial>,
+    /// Diagnostics of each round's starting model (round 1: the baseline).
+    pub diagnostics: Vec<Vec<Diagnostic>>,
+    /// Zone-check p-values of each round.
+    pub zone_p: Vec<Option<f64>>,
+}
+
+struct Proposal {
+    def: &'static EffectDef,
+    label: String,
+    material: Option<String>,
+    evidence: Vec<Diagnostic>,
+    strength: f64,
+}
+
+/// Runs the loop from `baseline` (fitted) on calibration runs `cal`, refitting `base_free` with kept effects.
+pub fn effects_loop(
+    ctx: &Context,
+    baseline: &Candidate,
+    base_free: &[FreeParam],
+    cal: &[usize],
+) -> crate::Result<LoopResult> {
+    let cfg = ctx.cfg;
+    let model = ctx.model;
+    let kind = model.kind();
+    let mut current = baseline.clone();
+    let mut out = LoopResult {
+        candidate: current.clone(),
+        added: Vec::new(),
+        trials: Vec::new(),
+        diagnostics: Vec::new(),
+        zone_p: Vec::new(),
+    };
+    let allowed: Vec<&'static EffectDef> = effects_for(kind)
+        .iter()
+        .filter(|d| cfg.effects.candidates.is_empty() || cfg.effects.candidates.iter().any(|c| c == d.name))
+        .collect();
+    let frame = model.map_frame();
+    let mut free = base_free.to_vec();
+    for round in 1..=cfg.effects.max_rounds {
+        (ctx.log)(&format!("effects loop, round {round}: diagnosing"));
+        let diag_sims = ctx.sims(&current, cal, cfg.repeats)?;
+        let (_, diags) = diagnose(model, &diag_sims, cfg.effects.permutations, cfg.seed);
+        out.diagnostics.push(diags.clone());
+        let zone_allowed = allowed.iter().any(|d| d.kind == EffectKind::Zone);
+        let zc = zone_allowed.then(|| zone_check(model, &diag_sims, &frame, 199, cfg.seed.wrapping_add(round as u64)));
+        out.zone_p.push(zc.as_ref().map(|z| z.p_value));
+        let proposals = propose(
+            ctx,
+            &allowed,
+            &current,
+            &diags,
+            zc.as_ref().map(|z| (z.p_value, z.statistic, z.region.is_some())),
+            round,
+        );
+        if proposals.is_empty() {
+            (ctx.log)("effects loop: no effect's signature shows in the residuals");
+            break;
+        }
+        let fold_of = folds(model.runs(), cal, cfg.inner_folds, cfg.seed, round as u64);
+        let centre = Centre {
+            impact_speed_mps: super::stats::median(
+                &diag_sims.iter().map(|s| s.median_of(|x| x.summary.impact_speed_mean_mps)).collect::<Vec<_>>(),
+            ),
+            impact_angle_deg: super::stats::median(
+                &diag_sims.iter().map(|s| s.median_of(|x| x.summary.impact_angle_mean_deg)).collect::<Vec<_>>(),
+            ),
+        };
+        // The baseline arm: the current model re-centred by the mobility factor.
+        let mut base_arm = Arm::default();
+        for &m in &MOBILITY_GRID {
+            let mut c = current.clone();
+            c.params.set(MOBILITY, m);
+            base_arm.settings.push(ctx.sims(&c, cal, cfg.search_repeats)?);
+            base_arm.cands.push(c);
+        }
+        base_arm.fold_settings = vec![(0..base_arm.settings.len()).collect(); cfg.inner_folds];
+        let (e0_grid, base_chosen) = cross_validate(ctx, cal, &fold_of, &base_arm.settings, &base_arm.fold_settings);
+        let mut e0_refit: Option<Vec<CvError>> = None;
+        let reference = base_arm.settings[MOBILITY_GRID.len() / 2].clone();
+        let mut best: Option<(f64, EffectTrial, Candidate, Vec<FreeParam>)> = None;
+        for prop in proposals {
+            (ctx.log)(&format!("effects loop, round {round}: trying {}", prop.label));
+            let arm = if prop.def.kind == EffectKind::Zone {
+                zone_arm(ctx, &current, &prop.label, &diag_sims, cal, &fold_of, &reference)?
+            } else {
+                let mut arm = Arm::default();
+                let values: Vec<Option<f64>> = if prop.def.grid.is_empty() {
+                    vec![None]
+                } else {
+                    prop.def.grid.iter().map(|v| Some(*v)).collect()
+                };
+                let restitution = is_restitution(prop.def.kind) && kind == ModelKind::Rigid3d;
+                let axis: &[f64] = if restitution { &CR_SCALE_GRID } else { &MOBILITY_GRID };
+                for v in values {
+                    for &m in axis {
+                        let mut c =
+                            with_effect(model, &current, prop.def, &prop.label, prop.material.clone(), v, &centre);
+                        if restitution {
+                            scale_cr(&mut c, m);
+                        } else {
+                            c.params.set(MOBILITY, m);
+                        }
+                        arm.settings.push(ctx.sims(&c, cal, cfg.search_repeats)?);
+                        arm.cands.push(c);
+                    }
+                }
+                arm.fold_settings = vec![(0..arm.settings.len()).collect(); cfg.inner_folds];
+                arm.full = (0..arm.settings.len()).collect();
+                arm
+            };
+            let (e1_grid, chosen) = cross_validate(ctx, cal, &fold_of, &arm.settings, &arm.fold_settings);
+            let score = |e: &[CvError]| mean(&e.iter().map(|x| x.crps_m).collect::<Vec<_>>());
+            let mae = |e: &[CvError]| mean(&e.iter().map(|x| x.abs_m).collect::<Vec<_>>());
+            let grid_before = score(&e0_grid);
+            let grid_after = score(&e1_grid);
+            // The setting that is best on all calibration runs starts the final refit.
+            let full = arm
+                .full
+                .iter()
+                .map(|&s| (objective(cfg.objective, model.runs(), &arm.settings[s]), s))
+                .min_by(|a, b| a.0.total_cmp(&b.0))
+                .map(|(_, s)| arm.cands[s].clone())
+                .unwrap_or_else(|| current.clone());
+            let effect_free = if prop.def.kind == EffectKind::Zone {
+                zone_free(ctx, &prop.label)
+            } else {
+                let mut f = free.clone();
+                if let Some(param) = prop.def.param {
+                    f.push(FreeParam {
+                        name: format!("{}.{param}", prop.label),
+                        min: prop.def.bounds.0,
+                        max: prop.def.bounds.1,
+                    });
+                }
+                f
+            };
+            // Promising on the grid: confirm with the refitting cross-validation.
+            let screening_cut = if grid_before > 0.0 { 1.0 - grid_after / grid_before } else { 0.0 };
+            let (before, after) = if screening_cut >= cfg.effects.min_improvement && full.effect(&prop.label).is_some() {
+                if e0_refit.is_none() {
+                    (ctx.log)("  refitting the baseline in each fold");
+                    let starts: Vec<Candidate> =
+                        base_chosen.iter().map(|&c| folded(kind, model, &base_arm.cands[c])).collect();
+                    e0_refit = Some(refit_cv(ctx, &starts, &free, cal, &fold_of, &format!("round {round} baseline"))?);
+                }
+                (ctx.log)(&format!("  refitting {} in each fold", prop.label));
+                let starts: Vec<Candidate> = chosen.iter().map(|&c| folded(kind, model, &arm.cands[c])).collect();
+                (
+                    e0_refit.clone().unwrap_or_default(),
+                    refit_cv(ctx, &starts, &effect_free, cal, &fold_of, &prop.label)?,
+                )
+            } else {
+                (e0_grid.clone(), e1_grid.clone())
+            };
+            let (mb, ma) = (score(&before), score(&after));
+            let diffs: Vec<f64> = before.iter().zip(&after).map(|(a, b)| a.crps_m - b.crps_m).collect();
+            let mut rng = stream(cfg.seed, u64::MAX - 4000 - round as u64);
+            let p = paired_sign_flip_p(&diffs, cfg.effects.permutations, &mut rng);
+            let improvement = if mb > 0.0 { 1.0 - ma / mb } else { 0.0 };
+            let effect_params: BTreeMap<String, f64> = full
+                .params
+                .0
+                .iter()
+                .filter(|(k, _)| k.starts_with(&format!("{}.", prop.label)) || k.as_str() == MOBILITY)
+                .map(|(k, v)| (k.clone(), *v))
+                .collect();
+            let region = full.effect(&prop.label).and_then(|e| e.region.clone());
+            let trial = EffectTrial {
+                round,
+                name: prop.def.name.to_string(),
+                label: prop.label.clone(),
+                proposed_by: prop.evidence.clone(),
+                grid_cv_crps_before_m: grid_before,
+                grid_cv_crps_after_m: grid_after,
+                cv_crps_before_m: mb,
+                cv_crps_after_m: ma,
+                cv_runout_mae_before_m: mae(&before),
+                cv_runout_mae_after_m: mae(&after),
+                relative_improvement: improvement,
+                p_value: p,
+                kept: false,
+                parameters: effect_params,
+                region,
+            };
+            (ctx.log)(&format!(
+                "  {}: CV CRPS {mb:.2} -> {ma:.2} m ({:+.1} %), p = {p:.3}; CV run-out MAE {:.2} -> {:.2} m (grid screening CRPS {grid_before:.2} -> {grid_after:.2} m)",
+                prop.label,
+                -100.0 * improvement,
+                mae(&before),
+                mae(&after)
+            ));
+            let passes = improvement >= cfg.effects.min_improvement
+                && p <= cfg.effects.alpha
+                && full.effect(&prop.label).is_some();
+            out.trials.push(trial.clone());
+            if passes && best.as_ref().is_none_or(|b| improvement > b.0) {
+                best = Some((improvement, trial, full, effect_free));
+            }
+        }
+        let Some((_, trial, chosen, refit_free)) = best else {
+            (ctx.log)("effects loop: no effect clearly improves the cross-validated error");
+            break;
+        };
+        if let Some(t) = out.trials.iter_mut().rev().find(|t| t.label == trial.label && t.round == round) {
+            t.kept = true;
+        }
+        // Refit on all calibration runs: base parameters plus the effect's own (a zone alone).
+        let spec = chosen.effect(&trial.label).cloned().expect("chosen candidate carries its effect");
+        let start = folded(kind, model, &chosen);
+        let def = definition(kind, spec.kind).expect("effect defined for the model");
+        (ctx.log)(&format!("effects loop, round {round}: keeping {}, refitting", spec.label));
+        let (refit, _) =
+            fit(ctx, &start, &refit_free, cal, cfg.effects.refit_evaluations, &format!("refit with {}", spec.label));
+        current = refit;
+        if spec.kind != EffectKind::Zone {
+            free = refit_free.clone();
+        } else {
+            free.extend(refit_free.iter().cloned());
+        }
+        let parameters: BTreeMap<String, f64> = current
+            .params
+            .0
+            .iter()
+            .filter(|(k, _)| k.starts_with(&format!("{}.", spec.label)))
+            .map(|(k, v)| (k.clone(), *v))
+            .collect();
+        let evidence = serde_json::json!({
+            "round": round,
+            "formula": def.formula,
+            "proposed_by": trial.proposed_by,
+            "grid_cv_crps_before_m": trial.grid_cv_crps_before_m,
+            "grid_cv_crps_after_m": trial.grid_cv_crps_after_m,
+            "cv_crps_before_m": trial.cv_crps_before_m,
+            "cv_crps_after_m": trial.cv_crps_after_m,
+            "cv_runout_mae_before_m": trial.cv_runout_mae_before_m,
+            "cv_runout_mae_after_m": trial.cv_runout_mae_after_m,
+            "relative_improvement": trial.relative_improvement,
+            "p_value": trial.p_value,
+            "inner_folds": cfg.inner_folds,
+            "criterion": format!("relative improvement >= {} and one-sided paired permutation p <= {}", cfg.effects.min_improvement, cfg.effects.alpha),
+        });
+        out.added.push(AddedEffect {
+            name: def.name.to_string(),
+            label: spec.label.clone(),
+            parameters,
+            evidence,
+            region: spec.region.clone(),
+        });
+    }
+    out.candidate = current;
+    Ok(out)
+}
+
+/// Multiplies every material's (and zone's) mean Cr by `f`, capped at 1.
+fn scale_cr(c: &mut Candidate, f: f64) {
+    let names: Vec<String> = c.params.0.keys().filter(|k| k.ends_with(".cr_mean")).cloned().collect();
+    for n in names {
+        let v = c.params.get_or(&n, 0.0);
+        c.params.set(n, (v * f).min(1.0));
+    }
+}
+
+/// A candidate with its mobility factor folded into the materials.
+fn folded(kind: ModelKind, model: &dyn Model, c: &Candidate) -> Candidate {
+    let mut out = c.clone();
+    out.params = fold_mobility(kind, &c.params, model.materials());
+    out
+}
+
+/// Refitting cross-validation: in each fold, `free` is refitted from `starts[f]` on the other folds' runs
+/// (`cv_refit_evaluations` objective evaluations), then the fold's runs are predicted. Returns per-run errors in
+/// the order of `cal`.
+fn refit_cv(
+    ctx: &Context,
+    starts: &[Candidate],
+    free: &[FreeParam],
+    cal: &[usize],
+    fold_of: &[usize],
+    what: &str,
+) -> crate::Result<Vec<CvError>> {
+    let runs = ctx.model.runs();
+    let mut errors = vec![CvError { crps_m: f64::NAN, abs_m: f64::NAN }; cal.len()];
+    for (f, start) in starts.iter().enumerate() {
+        let train: Vec<usize> = (0..cal.len()).filter(|&j| fold_of[j] != f).map(|j| cal[j]).collect();
+        let test_pos: Vec<usize> = (0..cal.len()).filter(|&j| fold_of[j] == f).collect();
+        if test_pos.is_empty() {
+            continue;
+        }
+        // Only parameters the fold's start uses (a fold without a zone of its own has none to fit).
+        let mats = ctx.model.materials();
+        let used: Vec<FreeParam> = free
+            .iter()
+            .filter(|p| {
+                p.name
+                    .split_once('.')
+                    .is_none_or(|(prefix, _)| mats.iter().any(|m| m == prefix) || start.effect(prefix).is_some())
+            })
+            .cloned()
+            .collect();
+        let c = if used.is_empty() {
+            start.clone()
+        } else {
+            fit(ctx, start, &used, &train, ctx.cfg.effects.cv_refit_evaluations, &format!("{what}, fold {}", f + 1)).0
+        };
+        let test: Vec<usize> = test_pos.iter().map(|&j| cal[j]).collect();
+        // The fold's runs are predicted with the reported repeats: a steadier median for the paired test.
+        let sims = ctx.sims(&c, &test, ctx.cfg.repeats)?;
+        for (j, s) in test_pos.iter().zip(&sims) {
+            errors[*j] = CvError {
+                crps_m: crps(&s.runouts(), runs[s.run].runout_m),
+                abs_m: (s.median_runout() - runs[s.run].runout_m).abs(),
+            };
+        }
+    }
+    Ok(errors)
+}
+
+/// The effects whose signature shows, strongest first.
+fn propose(
+    ctx: &Context,
+    allowed: &[&'static EffectDef],
+    current: &Candidate,
+    diags: &[Diagnostic],
+    zone: Option<(f64, f64, bool)>,
+    round: usize,
+) -> Vec<Proposal> {
+    let cfg = ctx.cfg;
+    let alpha = cfg.effects.propose_alpha;
+    let runout: Vec<&Diagnostic> = diags.iter().filter(|d| d.residual == "runout").collect();
+    let mut props = Vec::new();
+    for def in allowed {
+        match def.kind {
+            EffectKind::Zone => {
+                if let Some((p, stat, has_region)) = zone {
+                    if p <= alpha && has_region {
+                        let n_zones = current.effects.iter().filter(|e| e.kind == EffectKind::Zone).count();
+                        let ev = Diagnostic {
+                            covariate: "deposition_excess".into(),
+                            residual: "rest_points".into(),
+                            spearman_rho: stat,
+                            p_value: p,
+                            n: 0,
+                        };
+                        props.push(Proposal {
+                            def,
+                            label: format!("zone{}", n_zones + 1),
+                            material: None,
+                            evidence: vec![ev],
+                            strength: p,
+                        });
+                    }
+                }
+            }
+            EffectKind::SoftDrag => {
+                if current.effect_of(EffectKind::SoftDrag).is_some() {
+                    continue;
+                }
+                for d in runout.iter().filter(|d| d.covariate.starts_with("path_fraction_") && d.p_value <= alpha) {
+                    let m = d.covariate.trim_start_matches("path_fraction_").to_string();
+                    props.push(Proposal {
+                        def,
+                        label: format!("soft_drag_{m}"),
+                        material: Some(m),
+                        evidence: vec![(*d).clone()],
+                        strength: d.p_value,
+                    });
+                }
+            }
+            _ => {
+                if current.effect_of(def.kind).is_some() {
+                    continue;
+                }
+                let hits: Vec<Diagnostic> = runout
+                    .iter()
+                    .filter(|d| def.signature.contains(&d.covariate.as_str()) && d.p_value <= alpha)
+                    .map(|d| (*d).clone())
+                    .collect();
+                if let Some(strength) = hits.iter().map(|d| d.p_value).reduce(f64::min) {
+                    props.push(Proposal { def, label: def.name.to_string(), material: None, evidence: hits, strength });
+                }
+            }
+        }
+    }
+    props.sort_by(|a, b| {
+        a.strength.total_cmp(&b.strength).then_with(|| {
+            let ra = a.evidence.iter().map(|d| d.spearman_rho.abs()).fold(0.0, f64::max);
+            let rb = b.evidence.iter().map(|d| d.spearman_rho.abs()).fold(0.0, f64::max);
+            rb.total_cmp(&ra)
+        })
+    });
+    props.truncate(cfg.effects.max_proposals);
+    let _ = round;
+    props
+}
+
+/// Out-of-fold errors: in each fold, the setting (among `fold_settings[f]`) with the best objective on the other
+/// folds' runs predicts the fold's runs. Returns the per-run errors (order of `cal`) and the chosen setting per
+/// fold.
+fn cross_validate(
+    ctx: &Context,
+    cal: &[usize],
+    fold_of: &[usize],
+    settings: &[Vec<RunSims>],
+    fold_settings: &[Vec<usize>],
+) -> (Vec<CvError>, Vec<usize>) {
+    let runs = ctx.model.runs();
+    let k = fold_settings.len();
+    let mut errors = vec![CvError { crps_m: f64::NAN, abs_m: f64::NAN }; cal.len()];
+    let mut chosen = vec![0; k];
+    for f in 0..k {
+        let train: Vec<usize> = (0..cal.len()).filter(|&j| fold_of[j] != f).collect();
+        let scored: Vec<(usize, f64)> = fold_settings[f]
+            .iter()
+            .map(|&s| {
+                (s, objective_of(ctx.cfg.objective, runs, &train.iter().map(|&j| &settings[s][j]).collect::<Vec<_>>()))
+            })
+            .collect();
+        let best = scored.iter().min_by(|a, b| a.1.total_cmp(&b.1)).map(|x| x.0).unwrap_or(0);
+        chosen[f] = best;
+        for j in (0..cal.len()).filter(|&j| fold_of[j] == f) {
+            let s = &settings[best][j];
+            errors[j] = CvError {
+                crps_m: crps(&s.runouts(), runs[s.run].runout_m),
+                abs_m: (s.median_runout() - runs[s.run].runout_m).abs(),
+            };
+        }
+    }
+    (errors, chosen)
+}
+
+/// One run's out-of-fold errors.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct CvError {
+    /// CRPS of the simulated run-outs, m.
+    crps_m: f64,
+    /// |median simulated − observed run-out|, m.
+    abs_m: f64,
+}
+
+/// The typical impact of the current model, where restitution effects are centred.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Centre {
+    /// Median impact (normal approach) speed, m/s.
+    pub impact_speed_mps: f64,
+    /// Median impact angle, degrees.
+    pub impact_angle_deg: f64,
+}
+
+/// `current` with effect `def` at `value` (its parameter), labelled `label`, centred at `centre` (see the module
+/// docs).
+pub fn with_effect(
+    model: &dyn Model,
+    current: &Candidate,
+    def: &EffectDef,
+    label: &str,
+    material: Option<String>,
+    value: Option<f64>,
+    centre: &Centre,
+) -> Candidate {
+    let mut c = current.clone();
+    if let (Some(param), Some(v)) = (def.param, value) {
+        c.params.set(format!("{label}.{param}"), v);
+    }
+    // The effect's factor at the typical impact; Cr is divided by it (3DRB only: the 2DLM speed rule has no
+    // parameter and RocFall applies it as is).
+    let factor = match (model.kind(), def.kind, value) {
+        (ModelKind::Rigid3d, EffectKind::SpeedRestitution, Some(k)) if centre.impact_speed_mps.is_finite() => {
+            1.0 / (1.0 + (centre.impact_speed_mps / k).powi(2))
+        }
+        (ModelKind::Rigid3d, EffectKind::AngleRestitution, Some(a)) if centre.impact_angle_deg.is_finite() => {
+            (centre.impact_angle_deg.max(5.0) / 30.0).powf(-a)
+        }
+        _ => 1.0,
+    };
+    if factor > 0.0 && factor != 1.0 {
+        let names: Vec<String> = c.params.0.keys().filter(|k| k.ends_with(".cr_mean")).cloned().collect();
+        for n in names {
+            let v = c.params.get_or(&n, 0.0);
+            c.params.set(n, (v / factor).min(1.0));
+        }
+    }
+    if def.kind == EffectKind::MassRestitution {
+        let mut masses: Vec<f64> = model.runs().iter().map(|r| r.mass_kg).collect();
+        masses.sort_by(|a, b| a.total_cmp(b));
+        c.params.set(format!("{label}.reference_kg"), masses[masses.len() / 2]);
+    }
+    c.effects.push(EffectSpec { kind: def.kind, label: label.to_string(), material, region: None });
+    c
+}
+
+/// `current` with a zone over `region` whose material is the region's dominant material with mobility `z`.
+pub fn with_zone(model: &dyn Model, current: &Candidate, label: &str, region: &Region, z: f64) -> Candidate {
+    let mut c = current.clone();
+    let dom = model.dominant_material(region);
+    let g = |n: &str| current.params.get_or(&format!("{dom}.{n}"), 0.0);
+    match model.kind() {
+        ModelKind::Rigid3d => {
+            let (cr, sd, s, d) =
+                apply_mobility_3d(g("cr_mean"), g("cr_sd"), g("static_friction_deg"), g("dynamic_friction_deg"), z);
+            for (n, v) in [("cr_mean", cr), ("cr_sd", sd), ("static_friction_deg", s), ("dynamic_friction_deg", d)] {
+                c.params.set(format!("{label}.{n}"), v);
+            }
+        }
+        ModelKind::Lumped2d => {
+            let (rn, rt, f) = apply_mobility_2d(g("rn_mean"), g("rt_mean"), g("friction_angle_deg"), z);
+            for (n, v) in [
+                ("rn_mean", rn),
+                ("rn_sd", g("rn_sd")),
+                ("rt_mean", rt),
+                ("rt_sd", g("rt_sd")),
+                ("friction_angle_deg", f),
+                ("roughness_sd_deg", g("roughness_sd_deg")),
+            ] {
+                c.params.set(format!("{label}.{n}"), v);
+            }
+        }
+    }
+    c.effects.push(EffectSpec {
+        kind: EffectKind::Zone,
+        label: label.to_string(),
+        material: None,
+        region: Some(region.clone()),
+    });
+    c
+}
+
+/// The free parameters of a zone's material in a refit.
+fn zone_free(ctx: &Context, label: &str) -> Vec<FreeParam> {
+    let kind = ctx.model.kind();
+    let names: &[&str] = match kind {
+        ModelKind::Rigid3d => &["cr_mean", "static_friction_deg", "dynamic_friction_deg"],
+        ModelKind::Lumped2d => &["rn_mean", "rt_mean", "friction_angle_deg"],
+    };
+    names
+        .iter()
+        .map(|n| {
+            let (min, max) = match kind.default_parameter(n).bounds() {
+                Some((a, b, _)) => (a, b),
+                None => kind.parameter_range(n),
+            };
+            FreeParam { name: format!("{label}.{n}"), min, max }
+        })
+        .collect()
+}
+
+/// The settings of one arm of the comparison: simulations of all calibration runs per setting, the candidate of
+/// each, which settings each fold may choose, and which ones count for the choice on all calibration runs.
+#[derive(Default)]
+struct Arm {
+    settings: Vec<Vec<RunSims>>,
+    cands: Vec<Candidate>,
+    fold_settings: Vec<Vec<usize>>,
+    full: Vec<usize>,
+}
+
+/// The zone arm: a polygon per fold from the training runs' deposition excess, and one from all calibration runs
+/// for the refit's start; each stepped over the zone mobility grid. Simulations whose current path stays away
+/// from the zone are taken from `reference` (exact: same streams, same parameters, never touching the zone).
+fn zone_arm(
+    ctx: &Context,
+    current: &Candidate,
+    label: &str,
+    diag_sims: &[RunSims],
+    cal: &[usize],
+    fold_of: &[usize],
+    reference: &[RunSims],
+) -> crate::Result<Arm> {
+    let cfg = ctx.cfg;
+    let model = ctx.model;
+    let frame = model.map_frame();
+    let k = cfg.inner_folds;
+    let mut arm = Arm { fold_settings: vec![Vec::new(); k], ..Default::default() };
+    for f in 0..=k {
+        // f == k: all calibration runs.
+        let train: Vec<RunSims> =
+            (0..cal.len()).filter(|&j| f == k || fold_of[j] != f).map(|j| diag_sims[j].clone()).collect();
+        let zc = zone_check(model, &train, &frame, 0, cfg.seed);
+        let Some(region) = zc.region else {
+            if f < k {
+                // No zone from this fold's training runs: the arm predicts with the current model.
+                arm.settings.push(reference.to_vec());
+                arm.cands.push(current.clone());
+                arm.fold_settings[f].push(arm.settings.len() - 1);
+            }
+            continue;
+        };
+        for &z in &ZONE_MOBILITY_GRID {
+            let c = with_zone(model, current, label, &region, z);
+            let sims = sims_reusing(ctx, &c, cal, reference, &region)?;
+            arm.settings.push(sims);
+            arm.cands.push(c);
+            if f < k {
+                arm.fold_settings[f].push(arm.settings.len() - 1);
+            } else {
+                arm.full.push(arm.settings.len() - 1);
+            }
+        }
+    }
+    Ok(arm)
+}
+
+/// Simulates `cal` under `c`, reusing `reference` (the same candidate without the zone) for every simulation whose
+/// path keeps clear of the region's bounding box (with a margin of two map cells plus 3 m: more than a zone
+/// triangle reaches beyond the region, plus a rock's reach and the path thinning).
+fn sims_reusing(
+    ctx: &Context,
+    c: &Candidate,
+    cal: &[usize],
+    reference: &[RunSims],
+    region: &Region,
+) -> crate::Result<Vec<RunSims>> {
+    let [x0, y0, x1, y1] = region.bbox();
+    // Zone triangles are those whose centre lies in the region: they reach about a cell beyond it.
+    let margin = 2.0 * ctx.model.map_frame().cell_m + 3.0;
+    let near = |s: &Sim| {
+        s.path.iter().any(|p| {
+            (p[0] as f64) >= x0 - margin
+                && (p[0] as f64) <= x1 + margin
+                && (p[1] as f64) >= y0 - margin
+                && (p[1] as f64) <= y1 + margin
+        })
+    };
+    let needed: Vec<(usize, usize)> = reference
+        .iter()
+        .enumerate()
+        .flat_map(|(j, rs)| rs.sims.iter().enumerate().filter(|(_, s)| near(s)).map(move |(r, _)| (j, r)))
+        .collect();
+    let prepared = ctx.model.prepare(c)?;
+    let runs = ctx.model.runs();
+    ctx.simulations.fetch_add(needed.len(), std::sync::atomic::Ordering::Relaxed);
+    let fresh = crate::parallel::collect_in_order(needed.len(), ctx.cfg.threads, |k| {
+        let (j, r) = needed[k];
+        prepared.simulate(&runs[cal[j]], r, ctx.cfg.seed)
+    });
+    let mut out = reference.to_vec();
+    for ((j, r), s) in needed.into_iter().zip(fresh) {
+        out[j].sims[r] = s;
+    }
+    Ok(out)
+}

@@ -1,0 +1,216 @@
+//! The five error measures of a calibrated model on a set of runs, and the floor the field scatter sets.
+//!
+//! Each run is simulated R times from its own release state; with `median_i` the median of its simulated run-outs,
+//! `obs_i` its observed run-out:
+//! - `runout_mae_m` = mean_i |median_i − obs_i|;
+//! - `runout_w1_m` = 1-Wasserstein distance between all observed run-outs and all simulated ones;
+//! - `endpoint_mae_m` = mean_i of the horizontal distance from the observed rest point to the coordinate-wise
+//!   median of the simulated rest points;
+//! - `coverage_90` = share of runs whose observed run-out lies within the 5th–95th percentiles of its simulations;
+//! - `runout_bias_m` = mean simulated run-out − mean observed run-out.
+//!
+//! **Scatter floor**: the `runout_mae_m` a perfect model of each release group's median would reach:
+//! mean_i |obs_i − median of the observed run-outs of i's release group|, the median taken over all observed runs
+//! of the group in the campaign (ours: a held-out set holds too few runs per group for its own median; the floor
+//! is only a yardstick and chooses nothing).
+
+use super::model::RunSims;
+use super::runs::FieldRun;
+use super::stats::{mean, median, wasserstein1};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// The five measures (plus context) on one set of runs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Metrics {
+    /// Mean |median simulated − observed run-out|, m.
+    pub runout_mae_m: f64,
+    /// 1-Wasserstein distance between observed and simulated run-outs, m.
+    pub runout_w1_m: f64,
+    /// Mean horizontal distance from observed to median simulated rest point, m.
+    pub endpoint_mae_m: f64,
+    /// Share of runs inside their simulated 5–95 % run-out interval.
+    pub coverage_90: f64,
+    /// Mean simulated − mean observed run-out, m.
+    pub runout_bias_m: f64,
+    /// The scatter floor of `runout_mae_m`, m.
+    pub scatter_floor_mae_m: f64,
+    /// Runs measured.
+    pub runs: usize,
+    /// Simulations per run.
+    pub repeats: usize,
+    /// Mean observed run-out, m.
+    pub observed_mean_m: f64,
+    /// Mean simulated run-out, m.
+    pub simulated_mean_m: f64,
+    /// Share of simulations that did not come to rest (left the terrain or hit a time limit).
+    pub not_stopped_fraction: f64,
+}
+
+impl Metrics {
+    /// `runout_mae_m` over the scatter floor (1 is the best any model can do on average).
+    pub fn mae_over_floor(&self) -> f64 {
+        if self.scatter_floor_mae_m > 0.0 {
+            self.runout_mae_m / self.scatter_floor_mae_m
+        } else {
+            f64::NAN
+        }
+    }
+}
+
+/// Metrics overall and per block.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MetricsSet {
+    /// All runs of the set.
+    pub overall: Metrics,
+    /// Per block id.
+    pub by_block: BTreeMap<String, Metrics>,
+}
+
+/// The metrics of `sims` (one entry per run, indices into `runs`).
+pub fn metrics(runs: &[FieldRun], sims: &[RunSims]) -> Metrics {
+    let n = sims.len();
+    let obs: Vec<f64> = sims.iter().map(|s| runs[s.run].runout_m).collect();
+    let all: Vec<f64> = sims.iter().flat_map(|s| s.runouts()).collect();
+    let mut abs_err = Vec::with_capacity(n);
+    let mut end_err = Vec::with_capacity(n);
+    let mut covered = 0usize;
+    let mut not_stopped = 0usize;
+    for s in sims {
+        let r = &runs[s.run];
+        abs_err.push((s.median_runout() - r.runout_m).abs());
+        let [mx, my] = s.median_rest_xy();
+        end_err.push((mx - r.rest_m[0]).hypot(my - r.rest_m[1]));
+        if r.runout_m >= s.runout_quantile(0.05) && r.runout_m <= s.runout_quantile(0.95) {
+            covered += 1;
+        }
+        not_stopped += s.sims.iter().filter(|x| !x.stopped).count();
+    }
+    let which: Vec<usize> = sims.iter().map(|s| s.run).collect();
+    Metrics {
+        runout_mae_m: mean(&abs_err),
+        runout_w1_m: wasserstein1(&obs, &all),
+        endpoint_mae_m: mean(&end_err),
+        coverage_90: if n > 0 { covered as f64 / n as f64 } else { f64::NAN },
+        runout_bias_m: mean(&all) - mean(&obs),
+        scatter_floor_mae_m: scatter_floor(runs, &which),
+        runs: n,
+        repeats: sims.first().map(|s| s.sims.len()).unwrap_or(0),
+        observed_mean_m: mean(&obs),
+        simulated_mean_m: mean(&all),
+        not_stopped_fraction: if all.is_empty() { 0.0 } else { not_stopped as f64 / all.len() as f64 },
+    }
+}
+
+/// Metrics overall and for each block.
+pub fn metrics_set(runs: &[FieldRun], sims: &[RunSims]) -> MetricsSet {
+    let mut blocks: BTreeMap<String, Vec<RunSims>> = BTreeMap::new();
+    for s in sims {
+        blocks.entry(runs[s.run].block_id.clone()).or_default().push(s.clone());
+    }
+    MetricsSet {
+        overall: metrics(runs, sims),
+        by_block: blocks.iter().map(|(b, v)| (b.clone(), metrics(runs, v))).collect(),
+    }
+}
+
+/// The scatter floor of `runout_mae_m` over runs `which`: mean |obs − median obs of the run's release group (all
+/// runs of the campaign)|.
+pub fn scatter_floor(runs: &[FieldRun], which: &[usize]) -> f64 {
+    let mut groups: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
+    for r in runs {
+        groups.entry(r.group).or_default().push(r.runout_m);
+    }
+    let med: BTreeMap<usize, f64> = groups.iter().map(|(g, v)| (*g, median(v))).collect();
+    mean(&which.iter().map(|&i| (runs[i].runout_m - med[&runs[i].group]).abs()).collect::<Vec<_>>())
+}
+
+/// The continuous ranked probability score of a simulated run-out sample against the observed run-out, m (the
+/// unbiased "fair" estimator: mean |x − y| − Σ_{i≠j} |x_i − x_j| / (2 n (n − 1)); Gneiting & Raftery 2007). A proper
+/// score: it is smallest when the simulated distribution is the true one, so it rewards the right spread as well
+/// as the right median. Lower is better.
+pub fn crps(values: &[f64], y: f64) -> f64 {
+    let n = values.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    let a = values.iter().map(|x| (x - y).abs()).sum::<f64>() / n as f64;
+    if n < 2 {
+        return a;
+    }
+    let s = super::stats::sorted(values);
+    // Σ_{i<j} (x_j − x_i) over a sorted sample = Σ_k x_k (2k − n + 1).
+    let pair_sum: f64 = s.iter().enumerate().map(|(k, x)| x * (2.0 * k as f64 - n as f64 + 1.0)).sum();
+    a - pair_sum / (n as f64 * (n as f64 - 1.0))
+}
+
+/// Per-run CRPS of the simulated run-outs, in the order of `sims`.
+pub fn run_crps(runs: &[FieldRun], sims: &[RunSims]) -> Vec<f64> {
+    sims.iter().map(|s| crps(&s.runouts(), runs[s.run].runout_m)).collect()
+}
+
+/// Per-run absolute run-out error |median simulated − observed|, in the order of `sims`.
+pub fn run_errors(runs: &[FieldRun], sims: &[RunSims]) -> Vec<f64> {
+    sims.iter().map(|s| (s.median_runout() - runs[s.run].runout_m).abs()).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::model::{PathSummary, Sim};
+
+    fn run(i: usize, group: usize, obs: f64) -> FieldRun {
+        FieldRun {
+            id: format!("r{i}"),
+            index: i,
+            block_id: format!("b{group}"),
+            mass_kg: 10.0,
+            size_m: [0.3, 0.2, 0.1],
+            release_m: [0.0; 3],
+            velocity_mps: [0.0; 3],
+            spin_radps: [0.0; 3],
+            rest_m: [obs, 0.0, 0.0],
+            runout_m: obs,
+            group,
+        }
+    }
+
+    fn sims(run: usize, values: &[f64]) -> RunSims {
+        RunSims {
+            run,
+            sims: values
+                .iter()
+                .map(|&v| Sim {
+                    runout_m: v,
+                    rest_m: [v, 0.0, 0.0],
+                    stopped: true,
+                    summary: PathSummary::default(),
+                    path: vec![],
+                })
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn metrics_match_hand_computation() {
+        let runs = vec![run(0, 0, 10.0), run(1, 0, 14.0), run(2, 1, 20.0)];
+        let s = vec![sims(0, &[9.0, 11.0, 12.0]), sims(1, &[9.0, 11.0, 12.0]), sims(2, &[30.0, 31.0, 32.0])];
+        let m = metrics(&runs, &s);
+        assert!((m.runout_mae_m - (1.0 + 3.0 + 11.0) / 3.0).abs() < 1e-12);
+        assert!((m.endpoint_mae_m - m.runout_mae_m).abs() < 1e-12);
+        // 10 lies outside [9.2, 11.9]; 14 outside; 20 outside.
+        assert_eq!(m.coverage_90, 0.0);
+        let sim_mean = (9.0 + 11.0 + 12.0) * 2.0 / 9.0 + 31.0 / 3.0;
+        assert!((m.runout_bias_m - (sim_mean - 44.0 / 3.0)).abs() < 1e-12);
+        // Group 0 median 12: |10−12| + |14−12| = 4; group 1 alone adds 0.
+        assert!((m.scatter_floor_mae_m - 4.0 / 3.0).abs() < 1e-12);
+        // A subset still uses the whole group's median.
+        assert!((scatter_floor(&runs, &[0]) - 2.0).abs() < 1e-12);
+        // CRPS: a point forecast reduces to the absolute error; a sample's own spread is credited.
+        assert!((crps(&[3.0, 3.0], 5.0) - 2.0).abs() < 1e-12);
+        assert!((crps(&[0.0, 2.0], 1.0) - 0.0).abs() < 1e-12);
+        let set = metrics_set(&runs, &s);
+        assert_eq!(set.by_block.len(), 2);
+        assert!((set.by_block["b1"].runout_mae_m - 11.0).abs() < 1e-12);
+    }
+}

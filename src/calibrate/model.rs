@@ -1,0 +1,199 @@
+//! What calibration needs from an engine: simulate one observed run under a candidate model, from the run's own
+//! release state, with a random stream fixed by (seed, run, repeat), and summarise the simulated path.
+//!
+//! **Common random numbers.** Repeat `k` of run `i` always draws from `stream(seed, i·2²⁴ + k)`, with `i` the run's
+//! position in the campaign file. Every candidate parameter set therefore sees the same orientations and the same
+//! standard-normal draws behind its restitution coefficients, so differences between candidates are differences of
+//! the model, not of luck (physics.md §5), and a run gets the same streams in every split and fold.
+
+use super::config::ModelKind;
+use super::params::Candidate;
+use super::runs::FieldRun;
+use super::stats::{median, quantile_sorted, sorted};
+use crate::error::Result;
+use crate::raster::Grid;
+
+/// What a simulated path looked like, for the residual diagnosis.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PathSummary {
+    /// Mean slope of the ground under the path, weighted by horizontal distance, degrees.
+    pub slope_mean_deg: f64,
+    /// Share of the horizontal path over ground gentler than 30° (physics.md §4: where rolling resistance shows).
+    pub gentle_fraction: f64,
+    /// Slope of the ground under the rest point, degrees.
+    pub end_slope_deg: f64,
+    /// Mean normal approach speed of the impacts, m/s (0 without impacts).
+    pub impact_speed_mean_mps: f64,
+    /// Largest normal approach speed, m/s.
+    pub impact_speed_max_mps: f64,
+    /// Mean impact angle between the incoming velocity and the ground, degrees.
+    pub impact_angle_mean_deg: f64,
+    /// Number of impacts.
+    pub impacts: u32,
+    /// Share of the horizontal path over each material of the model (declared materials first, then zones).
+    pub material_fraction: Vec<f64>,
+}
+
+/// One simulation of one run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sim {
+    /// Horizontal distance from release to rest (or to where the rock left the terrain), m.
+    pub runout_m: f64,
+    /// End position in the campaign's frame, m.
+    pub rest_m: [f64; 3],
+    /// True if the rock came to rest (false: it left the terrain or hit a time limit).
+    pub stopped: bool,
+    /// Path summary.
+    pub summary: PathSummary,
+    /// The horizontal path, thinned to about 1 m spacing, campaign frame (y = 0 on a profile).
+    pub path: Vec<[f32; 2]>,
+}
+
+/// All simulations of one run under one candidate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSims {
+    /// Index of the run in the model's run list.
+    pub run: usize,
+    /// One per repeat.
+    pub sims: Vec<Sim>,
+}
+
+impl RunSims {
+    /// The simulated run-outs.
+    pub fn runouts(&self) -> Vec<f64> {
+        self.sims.iter().map(|s| s.runout_m).collect()
+    }
+
+    /// Median simulated run-out.
+    pub fn median_runout(&self) -> f64 {
+        median(&self.runouts())
+    }
+
+    /// Quantile `p` of the simulated run-outs.
+    pub fn runout_quantile(&self, p: f64) -> f64 {
+        quantile_sorted(&sorted(&self.runouts()), p)
+    }
+
+    /// Coordinate-wise median of the simulated rest points (x, y), m (ours: simple and robust).
+    pub fn median_rest_xy(&self) -> [f64; 2] {
+        let xs: Vec<f64> = self.sims.iter().map(|s| s.rest_m[0]).collect();
+        let ys: Vec<f64> = self.sims.iter().map(|s| s.rest_m[1]).collect();
+        [median(&xs), median(&ys)]
+    }
+
+    /// Median over repeats of a path-summary value.
+    pub fn median_of(&self, f: impl Fn(&Sim) -> f64) -> f64 {
+        median(&self.sims.iter().map(f).collect::<Vec<_>>())
+    }
+}
+
+/// Where maps of a model's residuals are drawn: the extent and cell size of the residual grid, and the terrain
+/// to shade under it.
+#[derive(Debug, Clone)]
+pub struct MapFrame {
+    /// Elevation grid for the hillshade (a DEM terrain), in the campaign frame.
+    pub dem: Option<Grid>,
+    /// Extent (x_min, y_min, x_max, y_max) in the campaign frame, m.
+    pub extent_m: [f64; 4],
+    /// Cell size of residual maps, m.
+    pub cell_m: f64,
+    /// True for a profile (maps are 1-D along x).
+    pub profile: bool,
+}
+
+/// A model ready to simulate: a candidate applied to the engine's terrain or profile.
+pub trait Prepared: Sync {
+    /// Simulates repeat `repeat` of `run` with streams from `seed`.
+    fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim;
+}
+
+/// An engine bound to a campaign.
+pub trait Model: Sync {
+    /// Which engine.
+    fn kind(&self) -> ModelKind;
+    /// The observed runs.
+    fn runs(&self) -> &[FieldRun];
+    /// Names of the release groups (indexed by [`FieldRun::group`]).
+    fn group_names(&self) -> &[String];
+    /// The declared materials.
+    fn materials(&self) -> &[String];
+    /// Height of a run's release point above the ground under it, m.
+    fn release_height_m(&self, run: &FieldRun) -> f64;
+    /// The material covering most of `region`, for a new zone's starting values.
+    fn dominant_material(&self, region: &super::params::Region) -> String;
+    /// Where residual maps go.
+    fn map_frame(&self) -> MapFrame;
+    /// Applies a candidate.
+    fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>>;
+}
+
+/// The random stream index of repeat `repeat` of the run at campaign position `index`.
+pub fn stream_index(index: usize, repeat: usize) -> u64 {
+    ((index as u64) << 24) | repeat as u64
+}
+
+/// Simulates runs `which` (indices into `model.runs()`) `repeats` times each under `candidate`, in parallel over
+/// runs × repeats on `threads` threads (0 = all cores). Results are in the order of `which` and do not depend on
+/// the thread count.
+pub fn evaluate(
+    model: &dyn Model,
+    candidate: &Candidate,
+    which: &[usize],
+    repeats: usize,
+    seed: u64,
+    threads: usize,
+) -> Result<Vec<RunSims>> {
+    let prepared = model.prepare(candidate)?;
+    Ok(evaluate_prepared(model, prepared.as_ref(), which, repeats, seed, threads))
+}
+
+/// [`evaluate`] with a prepared model.
+pub fn evaluate_prepared(
+    model: &dyn Model,
+    prepared: &dyn Prepared,
+    which: &[usize],
+    repeats: usize,
+    seed: u64,
+    threads: usize,
+) -> Vec<RunSims> {
+    let runs = model.runs();
+    let n = which.len() * repeats;
+    let flat = crate::parallel::collect_in_order(n, threads, |k| {
+        let (i, r) = (which[k / repeats], k % repeats);
+        prepared.simulate(&runs[i], r, seed)
+    });
+    let mut out: Vec<RunSims> = which.iter().map(|&i| RunSims { run: i, sims: Vec::with_capacity(repeats) }).collect();
+    for (k, s) in flat.into_iter().enumerate() {
+        out[k / repeats].sims.push(s);
+    }
+    out
+}
+
+/// Keeps the path points every `spacing_m` of horizontal travel (and always the last point).
+#[derive(Debug, Clone, Default)]
+pub struct PathThinner {
+    /// Points kept.
+    pub points: Vec<[f32; 2]>,
+    last: Option<[f64; 2]>,
+}
+
+impl PathThinner {
+    /// Offers a point; keeps it if it is at least `spacing_m` from the last kept one.
+    pub fn offer(&mut self, x: f64, y: f64, spacing_m: f64) {
+        match self.last {
+            Some([a, b]) if (x - a).hypot(y - b) < spacing_m => {}
+            _ => {
+                self.points.push([x as f32, y as f32]);
+                self.last = Some([x, y]);
+            }
+        }
+    }
+
+    /// Adds the final point.
+    pub fn finish(mut self, x: f64, y: f64) -> Vec<[f32; 2]> {
+        if self.last != Some([x, y]) {
+            self.points.push([x as f32, y as f32]);
+        }
+        self.points
+    }
+}

@@ -1,0 +1,332 @@
+//! The 2DLM engine as a calibration [`Model`] on a profile campaign: releases and rest points along the profile
+//! (`x_m`, `z_m`; `y_m` absent or zero), the profile from `profile.csv`, each run started at its measured position
+//! and velocity (vx, vz; spin from `wy_radps`), mass from its block.
+
+use super::config::{CalibrationConfig, ModelKind};
+use super::effects::EffectKind;
+use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
+use super::params::{apply_mobility_2d, Candidate, Params, Region};
+use super::runs::FieldRun;
+use crate::error::{Error, Result};
+use crate::lumped2d::{
+    simulate_rock, FlightPiece, FrictionAngle, ImpactEvent, Material2d, Options2d, PathObserver, Profile, RockStart2d,
+    Rotation, SlidePiece, Slope2d, StopReason,
+};
+use crate::random::{stream, TruncNormal};
+use std::path::Path;
+
+/// The 2DLM engine bound to a profile campaign.
+#[derive(Debug, Clone)]
+pub struct Model2d {
+    runs: Vec<FieldRun>,
+    group_names: Vec<String>,
+    profile: Profile,
+    materials: Vec<String>,
+    options: Options2d,
+}
+
+impl Model2d {
+    /// Reads the profile and binds the runs to it.
+    pub fn new(
+        runs: Vec<FieldRun>,
+        group_names: Vec<String>,
+        profile_file: &Path,
+        cfg: &CalibrationConfig,
+    ) -> Result<Model2d> {
+        let profile = Profile::from_csv_path(profile_file)?;
+        Self::from_parts(runs, group_names, profile, cfg.options2d.clone())
+    }
+
+    /// A model from a profile and options. For synthetic studies and tests.
+    pub fn from_parts(
+        runs: Vec<FieldRun>,
+        group_names: Vec<String>,
+        profile: Profile,
+        options: Options2d,
+    ) -> Result<Model2d> {
+        let (x0, x1) = profile.x_range_m();
+        for r in &runs {
+            if r.release_m[1] != 0.0 || r.rest_m[1] != 0.0 {
+                return Err(Error::invalid(
+                    format!("run {}", r.id),
+                    "has a non-zero y in a profile campaign",
+                    "give y_m = 0 (or leave the column out) for runs along a profile",
+                ));
+            }
+            if !(r.release_m[0] >= x0 && r.release_m[0] <= x1) {
+                return Err(Error::invalid(
+                    format!("run {}", r.id),
+                    format!("release x {} is outside the profile [{x0}, {x1}]", r.release_m[0]),
+                    "check the campaign and the profile share a frame",
+                ));
+            }
+        }
+        let materials = profile.material_names().to_vec();
+        Ok(Model2d { runs, group_names, profile, materials, options })
+    }
+
+    fn material(params: &Params, prefix: &str, m: f64) -> Result<Material2d> {
+        let g = |n: &str| {
+            params.get(&format!("{prefix}.{n}")).ok_or_else(|| {
+                Error::invalid(
+                    format!("{prefix}.{n}"),
+                    "has no value",
+                    "this is a bug in the calibration: please report it",
+                )
+            })
+        };
+        let (rn, rt, f) = apply_mobility_2d(g("rn_mean")?, g("rt_mean")?, g("friction_angle_deg")?, m);
+        let mat = Material2d {
+            rn: TruncNormal::three_sigma(rn, g("rn_sd")?, 0.0, 1.0),
+            rt: TruncNormal::three_sigma(rt, g("rt_sd")?, 0.0, 1.0),
+            friction: FrictionAngle::Given(TruncNormal::fixed(f.clamp(0.0, 89.9))),
+            roughness_sd_deg: g("roughness_sd_deg")?.clamp(0.0, 30.0),
+        };
+        Ok(mat)
+    }
+
+    /// The profile with `zones` cut in as extra materials: vertices are added at the interval ends, and segments
+    /// whose middle lies inside an interval take the zone's material.
+    fn zoned_profile(&self, zones: &[(String, [f64; 2])]) -> Result<Profile> {
+        if zones.is_empty() {
+            return Ok(self.profile.clone());
+        }
+        let p = &self.profile;
+        let mut xs: Vec<[f64; 2]> = (0..p.n_vertices()).map(|i| p.vertex(i)).collect();
+        let mut seg_mat: Vec<usize> = p.segment_materials().to_vec();
+        for (_, [a, b]) in zones {
+            for cut in [*a, *b] {
+                let mut k = 0;
+                while k + 1 < xs.len() {
+                    let (u, v) = (xs[k], xs[k + 1]);
+                    if v[0] > u[0] && cut > u[0] + 1e-6 && cut < v[0] - 1e-6 {
+                        let z = u[1] + (v[1] - u[1]) * (cut - u[0]) / (v[0] - u[0]);
+                        xs.insert(k + 1, [cut, z]);
+                        seg_mat.insert(k + 1, seg_mat[k]);
+                        break;
+                    }
+                    k += 1;
+                }
+            }
+        }
+        let mut names = p.material_names().to_vec();
+        for (label, [a, b]) in zones {
+            names.push(label.clone());
+            let idx = names.len() - 1;
+            for k in 0..seg_mat.len() {
+                let mid = 0.5 * (xs[k][0] + xs[k + 1][0]);
+                if mid >= *a && mid <= *b {
+                    seg_mat[k] = idx;
+                }
+            }
+        }
+        Profile::new(&xs, seg_mat, names, "profile with zones")
+    }
+}
+
+struct Prepared2d<'a> {
+    model: &'a Model2d,
+    slope: Slope2d,
+    options: Options2d,
+}
+
+impl Model for Model2d {
+    fn kind(&self) -> ModelKind {
+        ModelKind::Lumped2d
+    }
+
+    fn runs(&self) -> &[FieldRun] {
+        &self.runs
+    }
+
+    fn group_names(&self) -> &[String] {
+        &self.group_names
+    }
+
+    fn materials(&self) -> &[String] {
+        &self.materials
+    }
+
+    fn release_height_m(&self, run: &FieldRun) -> f64 {
+        self.profile.z_at(run.release_m[0]).map(|z| run.release_m[2] - z).unwrap_or(0.0).max(0.0)
+    }
+
+    fn dominant_material(&self, region: &Region) -> String {
+        let p = &self.profile;
+        let mut length = vec![0.0; self.materials.len()];
+        for k in 0..p.n_segments() {
+            let (a, b) = (p.vertex(k), p.vertex(k + 1));
+            if region.contains(0.5 * (a[0] + b[0]), 0.0) {
+                length[p.segment_materials()[k]] += b[0] - a[0];
+            }
+        }
+        let best = (0..length.len()).max_by(|&i, &j| length[i].total_cmp(&length[j]).then(j.cmp(&i))).unwrap_or(0);
+        self.materials[best].clone()
+    }
+
+    fn map_frame(&self) -> MapFrame {
+        let (x0, x1) = self.profile.x_range_m();
+        MapFrame { dem: None, extent_m: [x0, -0.5, x1, 0.5], cell_m: ((x1 - x0) / 100.0).max(0.5), profile: true }
+    }
+
+    fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>> {
+        let p = &candidate.params;
+        let m = p.mobility();
+        let mut options = self.options.clone();
+        let mut zones = Vec::new();
+        for e in &candidate.effects {
+            match e.kind {
+                EffectKind::SpeedRestitution => options.scale_rn_by_velocity = true,
+                EffectKind::CrspRotation => options.rotation = Rotation::Crsp,
+                EffectKind::Zone => match &e.region {
+                    Some(Region::Interval(iv)) => zones.push((e.label.clone(), *iv)),
+                    _ => {
+                        return Err(Error::invalid(
+                            &e.label,
+                            "a 2DLM zone needs an interval along the profile",
+                            "this is a bug in the calibration: please report it",
+                        ))
+                    }
+                },
+                _ => {
+                    return Err(Error::invalid(
+                        &e.label,
+                        format!("{:?} is not available in the 2DLM engine", e.kind),
+                        "use --model 3drb for this effect",
+                    ));
+                }
+            }
+        }
+        let profile = self.zoned_profile(&zones)?;
+        let mut mats = Vec::new();
+        for name in &self.materials {
+            mats.push(Self::material(p, name, m)?);
+        }
+        for (label, _) in &zones {
+            mats.push(Self::material(p, label, m)?);
+        }
+        let slope = Slope2d::new(profile, mats)?;
+        Ok(Box::new(Prepared2d { model: self, slope, options }))
+    }
+}
+
+impl Prepared for Prepared2d<'_> {
+    fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
+        let _ = self.model;
+        let mut rng = stream(seed, super::model::stream_index(run.index, repeat));
+        let start = RockStart2d {
+            x_m: run.release_m[0],
+            z_m: run.release_m[2],
+            vx_mps: run.velocity_mps[0],
+            vz_mps: run.velocity_mps[2],
+            spin_radps: run.spin_radps[1],
+            mass_kg: run.mass_kg,
+        };
+        let profile = self.slope.profile();
+        let mut obs = PathObserver2d::new(profile);
+        let r = simulate_rock(&self.slope, &start, &self.options, &mut rng, &mut obs);
+        let mut summary = obs.summary;
+        let total: f64 = summary.material_fraction.iter().sum();
+        if total > 0.0 {
+            summary.slope_mean_deg /= total;
+            summary.gentle_fraction /= total;
+            for f in summary.material_fraction.iter_mut() {
+                *f /= total;
+            }
+        }
+        if summary.impacts > 0 {
+            summary.impact_speed_mean_mps /= summary.impacts as f64;
+            summary.impact_angle_mean_deg /= summary.impacts as f64;
+        }
+        summary.end_slope_deg = slope_at(profile, r.end_x_m).0;
+        // Zones add materials after the declared ones; fold them into the fraction vector as they are.
+        let path = obs.thinner.finish(r.end_x_m, 0.0);
+        Sim {
+            runout_m: r.runout_m,
+            rest_m: [r.end_x_m, 0.0, r.end_z_m],
+            stopped: r.stop_reason == StopReason::Stopped,
+            summary,
+            path,
+        }
+    }
+}
+
+/// Slope (degrees) and material index of the profile at x (the first segment there).
+fn slope_at(profile: &Profile, x: f64) -> (f64, usize) {
+    let n = profile.n_segments();
+    let k = profile.segments_at(x).start.min(n.saturating_sub(1));
+    let (a, b) = (profile.vertex(k), profile.vertex(k + 1));
+    let slope = (b[1] - a[1]).abs().atan2((b[0] - a[0]).abs()).to_degrees();
+    (slope, profile.segment_materials()[k])
+}
+
+struct PathObserver2d<'a> {
+    profile: &'a Profile,
+    summary: PathSummary,
+    thinner: PathThinner,
+}
+
+impl<'a> PathObserver2d<'a> {
+    fn new(profile: &'a Profile) -> Self {
+        let summary =
+            PathSummary { material_fraction: vec![0.0; profile.material_names().len()], ..Default::default() };
+        PathObserver2d { profile, summary, thinner: PathThinner::default() }
+    }
+
+    /// Adds a horizontal stretch [x0, x1] of the path.
+    fn stretch(&mut self, x0: f64, x1: f64) {
+        let (lo, hi) = (x0.min(x1), x0.max(x1));
+        if hi <= lo {
+            return;
+        }
+        // Walk the segments under the stretch.
+        let p = self.profile;
+        for k in 0..p.n_segments() {
+            let (a, b) = (p.vertex(k), p.vertex(k + 1));
+            let (s0, s1) = (a[0].max(lo), b[0].min(hi));
+            if s1 <= s0 {
+                continue;
+            }
+            let len = s1 - s0;
+            let slope = (b[1] - a[1]).abs().atan2((b[0] - a[0]).abs()).to_degrees();
+            self.summary.slope_mean_deg += slope * len;
+            if slope < 30.0 {
+                self.summary.gentle_fraction += len;
+            }
+            self.summary.material_fraction[p.segment_materials()[k]] += len;
+        }
+        let steps = ((hi - lo) / 1.0).ceil() as usize;
+        for i in 0..=steps {
+            let x = x0 + (x1 - x0) * i as f64 / steps.max(1) as f64;
+            self.thinner.offer(x, 0.0, 1.0);
+        }
+    }
+}
+
+impl PathObserver for PathObserver2d<'_> {
+    fn flight(&mut self, piece: &FlightPiece) {
+        let e = piece.end_position();
+        self.stretch(piece.x0_m, e[0]);
+    }
+
+    fn slide(&mut self, piece: &SlidePiece) {
+        let e = piece.end_position();
+        self.stretch(piece.x0_m, e[0]);
+    }
+
+    fn impact(&mut self, ev: &ImpactEvent) {
+        let p = self.profile;
+        let k = ev.segment.min(p.n_segments().saturating_sub(1));
+        let (a, b) = (p.vertex(k), p.vertex(k + 1));
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]).max(1e-12);
+        let (t, n) = ([(b[0] - a[0]) / len, (b[1] - a[1]) / len], [-(b[1] - a[1]) / len, (b[0] - a[0]) / len]);
+        let v = ev.velocity_in_mps;
+        let vn = (v[0] * n[0] + v[1] * n[1]).abs();
+        let vt = (v[0] * t[0] + v[1] * t[1]).abs();
+        let s = &mut self.summary;
+        s.impacts += 1;
+        s.impact_speed_mean_mps += vn;
+        s.impact_speed_max_mps = s.impact_speed_max_mps.max(vn);
+        s.impact_angle_mean_deg += vn.atan2(vt).to_degrees();
+    }
+}

@@ -1,0 +1,408 @@
+//! The 3DRB engine as a calibration [`Model`]: the campaign's blocks as rigid boxes on the terrain surface, each run
+//! started from its measured release exactly as `talus run` starts a campaign source (position, velocity and spin
+//! as measured, random orientation, lifted only if a vertex is buried; [`crate::source`]).
+
+use super::config::{CalibrationConfig, ModelKind};
+use super::effects::EffectKind;
+use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
+use super::params::{apply_mobility_3d, Candidate, Params, Region};
+use super::runs::FieldRun;
+use crate::campaign::Campaign;
+use crate::error::{Error, Result};
+use crate::random::{stream, TruncNormal};
+use crate::raster::Grid;
+use crate::rock::{random_orientation, RockBody};
+use crate::scenario::{MaterialsBy, TerrainSpec};
+use crate::sim::{simulate, Impact, Observer, RigidState, Sample, SimParams, StopReason};
+use crate::source::place_above_ground;
+use crate::terrain::{horizontal_to_local, Material, Terrain};
+use nalgebra::Vector3;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// The 3DRB engine bound to a campaign and a terrain.
+#[derive(Debug, Clone)]
+pub struct Model3d {
+    runs: Vec<FieldRun>,
+    group_names: Vec<String>,
+    materials: Vec<String>,
+    terrain: Terrain,
+    bodies: BTreeMap<String, RockBody>,
+    sim: SimParams,
+    dem: Option<Grid>,
+    median_mass_kg: f64,
+}
+
+impl Model3d {
+    /// Reads the terrain file and builds the blocks of `campaign` for its `runs`. `source` names the settings
+    /// file in errors.
+    pub fn new(
+        campaign: &Campaign,
+        runs: Vec<FieldRun>,
+        group_names: Vec<String>,
+        terrain_file: &Path,
+        cfg: &CalibrationConfig,
+        source: &str,
+    ) -> Result<Model3d> {
+        let map = &cfg.terrain;
+        let (mesh, _) = crate::terrain::build::read_terrain_file(terrain_file)?;
+        let stem = terrain_file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        let rename = |n: &str| map.material_names.get(n).cloned().unwrap_or_else(|| n.to_string());
+        let mut names: Vec<String> = match map.materials_by {
+            MaterialsBy::Single => vec!["default".into()],
+            MaterialsBy::Slope => vec!["face".into(), "floor".into()],
+            MaterialsBy::Group => mesh.group_names.iter().map(|n| rename(n)).collect(),
+            MaterialsBy::Material => mesh.material_names.iter().map(|n| rename(n)).collect(),
+            MaterialsBy::File => vec![rename(&stem)],
+        };
+        for z in &map.zones {
+            names.push(z.material.clone());
+        }
+        names.sort();
+        names.dedup();
+        let placeholder: Vec<Material> = names
+            .iter()
+            .map(|n| Material {
+                name: n.clone(),
+                cr: TruncNormal::fixed(0.3),
+                static_friction_deg: 35.0,
+                dynamic_friction_deg: 30.0,
+            })
+            .collect();
+        let spec = TerrainSpec {
+            files: vec![terrain_file.to_path_buf()],
+            up: map.up,
+            crs_epsg: None,
+            materials_by: map.materials_by,
+            slope_face_deg: map.slope_face_deg.unwrap_or(45.0),
+            material_names: map.material_names.clone(),
+            zones: map.zones.clone(),
+        };
+        let terrain = crate::terrain::build::build_terrain(
+            &[terrain_file.to_path_buf()],
+            &spec,
+            &placeholder,
+            Path::new(source),
+        )?;
+        let ext = terrain_file.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+        let dem = match ext.as_str() {
+            "asc" => Some(crate::io::ascii_grid::read_grid(terrain_file)?),
+            "tif" | "tiff" => Some(crate::io::geotiff::read_grid(terrain_file)?),
+            _ => None,
+        };
+        let mut bodies = BTreeMap::new();
+        for (id, block) in &campaign.blocks {
+            bodies.insert(id.clone(), campaign.body(block)?);
+        }
+        Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)
+    }
+
+    /// A model from a terrain already built (its materials name the calibrated materials), rock bodies by block
+    /// id, and engine settings. For synthetic studies and tests.
+    pub fn from_parts(
+        runs: Vec<FieldRun>,
+        group_names: Vec<String>,
+        terrain: Terrain,
+        bodies: BTreeMap<String, RockBody>,
+        sim: SimParams,
+        dem: Option<Grid>,
+    ) -> Result<Model3d> {
+        for r in &runs {
+            if !bodies.contains_key(&r.block_id) {
+                return Err(Error::invalid(
+                    format!("run {}", r.id),
+                    format!("block '{}' has no body", r.block_id),
+                    "list the block in block_metadata.csv",
+                ));
+            }
+            let p = horizontal_to_local(terrain.up, &terrain.origin, [r.release_m[0], r.release_m[1]]);
+            if terrain.surface.at(p[0], p[1]).is_none() {
+                return Err(Error::invalid(
+                    format!("run {}", r.trajectory_label()),
+                    format!("release point {:?} is not over the terrain", r.release_m),
+                    "check that the campaign and the terrain share a frame",
+                ));
+            }
+        }
+        let materials = terrain.materials.iter().map(|m| m.name.clone()).collect();
+        let mut masses: Vec<f64> = runs.iter().map(|r| r.mass_kg).collect();
+        masses.sort_by(|a, b| a.total_cmp(b));
+        let median_mass_kg = masses.get(masses.len() / 2).copied().unwrap_or(100.0);
+        Ok(Model3d { runs, group_names, materials, terrain, bodies, sim, dem, median_mass_kg })
+    }
+
+    /// The terrain (with the placeholder materials it was built with).
+    pub fn terrain(&self) -> &Terrain {
+        &self.terrain
+    }
+
+    fn local(&self, p: [f64; 3]) -> Vector3<f64> {
+        self.terrain.up.to_internal(p) - self.terrain.origin
+    }
+
+    fn material(params: &Params, prefix: &str, name: &str, m: f64) -> Result<Material> {
+        let g = |n: &str| {
+            params.get(&format!("{prefix}.{n}")).ok_or_else(|| {
+                Error::invalid(
+                    format!("{prefix}.{n}"),
+                    "has no value",
+                    "this is a bug in the calibration: please report it",
+                )
+            })
+        };
+        let (cr, sd, s, d) =
+            apply_mobility_3d(g("cr_mean")?, g("cr_sd")?, g("static_friction_deg")?, g("dynamic_friction_deg")?, m);
+        Ok(Material {
+            name: name.to_string(),
+            cr: TruncNormal::three_sigma(cr, sd, 0.0, 1.0),
+            static_friction_deg: s.clamp(0.0, 89.0),
+            dynamic_friction_deg: d.clamp(0.0, 89.0),
+        })
+    }
+}
+
+impl FieldRun {
+    /// The run's id, for messages.
+    pub fn trajectory_label(&self) -> &str {
+        &self.id
+    }
+}
+
+struct Prepared3d<'a> {
+    model: &'a Model3d,
+    terrain: Terrain,
+    sim: SimParams,
+}
+
+impl Model for Model3d {
+    fn kind(&self) -> ModelKind {
+        ModelKind::Rigid3d
+    }
+
+    fn runs(&self) -> &[FieldRun] {
+        &self.runs
+    }
+
+    fn group_names(&self) -> &[String] {
+        &self.group_names
+    }
+
+    fn materials(&self) -> &[String] {
+        &self.materials
+    }
+
+    fn release_height_m(&self, run: &FieldRun) -> f64 {
+        let p = self.local(run.release_m);
+        self.terrain.surface.height(p.x, p.y).map(|z| p.z - z).unwrap_or(0.0)
+    }
+
+    fn dominant_material(&self, region: &Region) -> String {
+        let mut count = vec![0usize; self.materials.len()];
+        for t in 0..self.terrain.triangle_material.len() as u32 {
+            let [a, b, c] = self.terrain.surface.corners(t);
+            let centre = (a + b + c) / 3.0 + self.terrain.origin;
+            if region.contains(centre.x, centre.y) {
+                let m = self.terrain.triangle_material[t as usize] as usize;
+                if m < count.len() {
+                    count[m] += 1;
+                }
+            }
+        }
+        let best = (0..count.len()).max_by_key(|&k| (count[k], std::cmp::Reverse(k))).unwrap_or(0);
+        self.materials[best].clone()
+    }
+
+    fn map_frame(&self) -> MapFrame {
+        let (x0, y0, x1, y1) = self.terrain.surface.bounds_xy();
+        let o = self.terrain.origin;
+        let terrain_box = [x0 + o.x, y0 + o.y, x1 + o.x, y1 + o.y];
+        let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+        for r in &self.runs {
+            for p in [r.release_m, r.rest_m] {
+                b = [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])];
+            }
+        }
+        let pad = 0.15 * (b[2] - b[0]).max(b[3] - b[1]) + 10.0;
+        let extent = [
+            (b[0] - pad).max(terrain_box[0]),
+            (b[1] - pad).max(terrain_box[1]),
+            (b[2] + pad).min(terrain_box[2]),
+            (b[3] + pad).min(terrain_box[3]),
+        ];
+        let tri = self.terrain.triangle_material.len().max(1) as f64;
+        let spacing = (2.0 * (x1 - x0) * (y1 - y0) / tri).sqrt();
+        let base = self.dem.as_ref().map(|g| g.cell_x_m).unwrap_or(spacing);
+        let cell = base.max((extent[2] - extent[0]).max(extent[3] - extent[1]) / 50.0);
+        MapFrame { dem: self.dem.clone(), extent_m: extent, cell_m: cell, profile: false }
+    }
+
+    fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>> {
+        let p = &candidate.params;
+        let m = p.mobility();
+        let mut terrain = self.terrain.clone();
+        for (k, name) in self.materials.iter().enumerate() {
+            terrain.materials[k] = Self::material(p, name, name, m)?;
+        }
+        let mut sim = self.sim.clone();
+        let value = |label: &str, n: &str| {
+            p.get(&format!("{label}.{n}")).ok_or_else(|| {
+                Error::invalid(
+                    format!("{label}.{n}"),
+                    "has no value",
+                    "this is a bug in the calibration: please report it",
+                )
+            })
+        };
+        for e in &candidate.effects {
+            let fx = &mut sim.effects;
+            match e.kind {
+                EffectKind::SpeedRestitution => fx.speed_restitution_k_mps = Some(value(&e.label, "k_mps")?),
+                EffectKind::AngleRestitution => fx.angle_restitution_exponent = Some(value(&e.label, "exponent")?),
+                EffectKind::MassRestitution => {
+                    fx.mass_restitution_exponent = Some(value(&e.label, "exponent")?);
+                    fx.mass_reference_kg = Some(p.get_or(&format!("{}.reference_kg", e.label), self.median_mass_kg));
+                }
+                EffectKind::Roughness => fx.roughness_m = Some(value(&e.label, "rough_m")?),
+                EffectKind::RollingResistance => fx.rolling_resistance = Some(value(&e.label, "mu_r")?),
+                EffectKind::SoftDrag => {
+                    fx.soft_drag_per_s = Some(value(&e.label, "rate_per_s")?);
+                    fx.soft_materials = e.material.iter().cloned().collect();
+                }
+                EffectKind::Zone => {
+                    let Some(region) = &e.region else {
+                        return Err(Error::invalid(
+                            &e.label,
+                            "a zone without a region",
+                            "this is a bug in the calibration: please report it",
+                        ));
+                    };
+                    terrain.materials.push(Self::material(p, &e.label, &e.label, m)?);
+                    let idx = (terrain.materials.len() - 1) as u16;
+                    for t in 0..terrain.triangle_material.len() as u32 {
+                        let [a, b, c] = terrain.surface.corners(t);
+                        let centre = (a + b + c) / 3.0 + terrain.origin;
+                        if region.contains(centre.x, centre.y) {
+                            terrain.triangle_material[t as usize] = idx;
+                        }
+                    }
+                }
+                EffectKind::CrspRotation => {
+                    return Err(Error::invalid(&e.label, "the CRSP rule is a 2DLM option", "use it with --model 2dlm"));
+                }
+            }
+        }
+        sim.effects.validate("effects.")?;
+        for (k, mat) in terrain.materials.iter().enumerate() {
+            mat.validate(&format!("materials.{}", terrain.materials[k].name))?;
+        }
+        terrain.friction = terrain.materials.iter().map(|m| (m.mu_static(), m.mu_dynamic())).collect();
+        Ok(Box::new(Prepared3d { model: self, terrain, sim }))
+    }
+}
+
+impl Prepared for Prepared3d<'_> {
+    fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
+        let model = self.model;
+        let terrain = &self.terrain;
+        let body = &model.bodies[&run.block_id];
+        let mut rng = stream(seed, super::model::stream_index(run.index, repeat));
+        let p = model.local(run.release_m);
+        let v = terrain.up.to_internal(run.velocity_mps);
+        let w = terrain.up.to_internal(run.spin_radps);
+        // As crate::source::Sources::release for a measured release.
+        let orientation = random_orientation(&mut rng);
+        let mut start = RigidState {
+            position_m: p,
+            velocity_mps: v,
+            orientation,
+            omega_body_radps: orientation.inverse_transform_vector(&w),
+        };
+        let mut lifted = start;
+        place_above_ground(terrain, body, &mut lifted, 0.0);
+        start.position_m.z = start.position_m.z.max(lifted.position_m.z);
+        let mut obs = PathObserver3d::new(terrain);
+        let out = simulate(terrain, body, start, &self.sim, &mut rng, &mut obs);
+        let end = out.final_state.position_m;
+        let d = end - start.position_m;
+        let file_end = terrain.to_file_frame(&end);
+        let o = terrain.origin;
+        let path = obs.thinner.finish(end.x + o.x, end.y + o.y);
+        let mut summary = obs.summary;
+        let total = summary.material_fraction.iter().sum::<f64>();
+        if total > 0.0 {
+            summary.slope_mean_deg /= total;
+            summary.gentle_fraction /= total;
+            for f in summary.material_fraction.iter_mut() {
+                *f /= total;
+            }
+        } else if let Some(g) = terrain.surface.at(p.x, p.y) {
+            summary.slope_mean_deg = slope_deg(&g.normal);
+            summary.gentle_fraction = if summary.slope_mean_deg < 30.0 { 1.0 } else { 0.0 };
+        }
+        if summary.impacts > 0 {
+            summary.impact_speed_mean_mps /= summary.impacts as f64;
+            summary.impact_angle_mean_deg /= summary.impacts as f64;
+        }
+        summary.end_slope_deg =
+            terrain.surface.at(end.x, end.y).map(|g| slope_deg(&g.normal)).unwrap_or(summary.slope_mean_deg);
+        Sim {
+            runout_m: d.x.hypot(d.y),
+            rest_m: file_end,
+            stopped: out.stop_reason == StopReason::Stopped,
+            summary,
+            path,
+        }
+    }
+}
+
+fn slope_deg(n: &Vector3<f64>) -> f64 {
+    n.z.abs().clamp(0.0, 1.0).acos().to_degrees()
+}
+
+/// Gathers the path summary while the engine runs.
+struct PathObserver3d<'a> {
+    terrain: &'a Terrain,
+    last: Option<Vector3<f64>>,
+    summary: PathSummary,
+    thinner: PathThinner,
+}
+
+impl<'a> PathObserver3d<'a> {
+    fn new(terrain: &'a Terrain) -> Self {
+        let summary = PathSummary { material_fraction: vec![0.0; terrain.materials.len()], ..Default::default() };
+        PathObserver3d { terrain, last: None, summary, thinner: PathThinner::default() }
+    }
+}
+
+impl Observer for PathObserver3d<'_> {
+    fn sample(&mut self, s: &Sample) {
+        let x = s.position_m;
+        let o = self.terrain.origin;
+        self.thinner.offer(x.x + o.x, x.y + o.y, 1.0);
+        if let Some(last) = self.last {
+            let step = (x.x - last.x).hypot(x.y - last.y);
+            if step > 0.0 {
+                if let Some(g) = self.terrain.surface.at(x.x, x.y) {
+                    let slope = slope_deg(&g.normal);
+                    self.summary.slope_mean_deg += slope * step;
+                    if slope < 30.0 {
+                        self.summary.gentle_fraction += step;
+                    }
+                    let m = self.terrain.triangle_material[g.triangle as usize] as usize;
+                    if let Some(f) = self.summary.material_fraction.get_mut(m) {
+                        *f += step;
+                    }
+                }
+            }
+        }
+        self.last = Some(x);
+    }
+
+    fn impact(&mut self, i: &Impact) {
+        let s = &mut self.summary;
+        s.impacts += 1;
+        s.impact_speed_mean_mps += i.approach_speed_mps;
+        s.impact_speed_max_mps = s.impact_speed_max_mps.max(i.approach_speed_mps);
+        s.impact_angle_mean_deg += i.impact_angle_deg;
+    }
+}

@@ -1,0 +1,533 @@
+//! The calibration report: `report.json` (machine-readable, the keys of issue 5 and more), `report.md` (for a
+//! person), SVG charts and the residual maps (GeoTIFF and PNG).
+
+use super::backanalysis::BackAnalysisRow;
+use super::config::CalibrationConfig;
+use super::diagnose::{covariates, residuals, Diagnostic};
+use super::effects_loop::{AddedEffect, EffectTrial};
+use super::maps::residual_map;
+use super::metrics::{Metrics, MetricsSet};
+use super::model::{Model, RunSims};
+use super::params::{Params, Region};
+use super::zone::ZoneCheck;
+use crate::error::{Error, Result};
+use crate::render::colormap::CATEGORICAL;
+use crate::render::{
+    histogram_chart, render_map, write_svg, Chart, Colormap, MapLayer, OverlayLine, Overlays, Series, SeriesStyle,
+};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// A model and its errors.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Stage {
+    /// Parameter values.
+    pub parameters: Params,
+    /// Effects switched on (labels).
+    pub effects: Vec<String>,
+    /// Metrics on the calibration runs.
+    pub calibration: Metrics,
+    /// Metrics on the held-out runs.
+    pub holdout: Metrics,
+    /// Per block, calibration runs.
+    pub calibration_by_block: BTreeMap<String, Metrics>,
+    /// Per block, held-out runs.
+    pub holdout_by_block: BTreeMap<String, Metrics>,
+}
+
+impl Stage {
+    /// A stage from metric sets.
+    pub fn new(parameters: Params, effects: Vec<String>, cal: MetricsSet, hold: MetricsSet) -> Stage {
+        Stage {
+            parameters,
+            effects,
+            calibration: cal.overall,
+            holdout: hold.overall,
+            calibration_by_block: cal.by_block,
+            holdout_by_block: hold.by_block,
+        }
+    }
+}
+
+/// A release group.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GroupInfo {
+    /// Name (`block:k`).
+    pub name: String,
+    /// Runs in it.
+    pub runs: usize,
+    /// Of which held out.
+    pub holdout: usize,
+}
+
+/// Wall times and simulation counts.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Timing {
+    /// Population fit, s.
+    pub population_fit_s: f64,
+    /// Per-run back-analysis, s.
+    pub back_analysis_s: f64,
+    /// Effects loop, s.
+    pub effects_loop_s: f64,
+    /// Final evaluation with the reported repeats, maps and report, s.
+    pub final_evaluation_s: f64,
+    /// Everything, s.
+    pub total_s: f64,
+    /// Rock simulations run.
+    pub simulations: usize,
+    /// Threads used.
+    pub threads: usize,
+}
+
+/// Everything `report.json` holds.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Report {
+    /// `3drb` or `2dlm`.
+    pub model: String,
+    /// Runs used to choose anything.
+    pub calibration_ids: Vec<String>,
+    /// Runs never used to choose anything.
+    pub holdout_ids: Vec<String>,
+    /// How the split was made.
+    pub split: String,
+    /// Release groups.
+    pub release_groups: Vec<GroupInfo>,
+    /// The calibrated model without added effects.
+    pub baseline: Stage,
+    /// The model after the effects loop.
+    #[serde(rename = "final")]
+    pub final_stage: Stage,
+    /// Effects kept.
+    pub effects_added: Vec<AddedEffect>,
+    /// Effects tried.
+    pub effects_tried: Vec<EffectTrial>,
+    /// Residual diagnosis of the baseline on the calibration runs.
+    pub diagnostics: Vec<Diagnostic>,
+    /// Residual diagnosis of the final model on the calibration runs.
+    pub diagnostics_final: Vec<Diagnostic>,
+    /// The zone check of the baseline (deposition excess): statistic and p-value.
+    pub zone_check: Option<(f64, f64)>,
+    /// Per-run back-analysis (mean ± sd per material).
+    pub back_analysis: Vec<BackAnalysisRow>,
+    /// Objective evaluations of the population fit and its final value.
+    pub population_fit: serde_json::Value,
+    /// Time.
+    pub timing: Timing,
+    /// The settings used.
+    pub settings: CalibrationConfig,
+}
+
+/// Writes `report.json`, `report.md`, the charts and maps into `dir`.
+#[allow(clippy::too_many_arguments)]
+pub fn write_report(
+    dir: &Path,
+    report: &Report,
+    model: &dyn Model,
+    base_cal: &[RunSims],
+    final_cal: &[RunSims],
+    base_hold: &[RunSims],
+    final_hold: &[RunSims],
+    zone: Option<&ZoneCheck>,
+) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let json = serde_json::to_string_pretty(report)
+        .map_err(|e| Error::invalid("report.json", e.to_string(), "this is a bug: please report it"))?;
+    crate::io::write_bytes_atomic(&dir.join("report.json"), json.as_bytes())?;
+    let runs = model.runs();
+    write_runs_csv(&dir.join("runs.csv"), model, base_cal, final_cal, base_hold, final_hold)?;
+    let mut figures: Vec<(String, String)> = Vec::new();
+    // Run-out distributions before and after.
+    for (name, title, base, fin) in [
+        ("runout_calibration.svg", "calibration runs", base_cal, final_cal),
+        ("runout_holdout.svg", "held-out runs", base_hold, final_hold),
+    ] {
+        if base.is_empty() {
+            continue;
+        }
+        let obs: Vec<f64> = base.iter().map(|s| runs[s.run].runout_m).collect();
+        let b: Vec<f64> = base.iter().flat_map(|s| s.runouts()).collect();
+        let f: Vec<f64> = fin.iter().flat_map(|s| s.runouts()).collect();
+        let chart = histogram_chart(
+            &format!("Run-out, {title}: observed and simulated"),
+            "run-out (m)",
+            &[("observed", &obs), ("baseline", &b), ("final", &f)],
+            24,
+        );
+        write_svg(&dir.join(name), &chart)?;
+        figures.push((name.into(), format!("Observed and simulated run-out distributions, {title}, before (baseline) and after (final) the effects loop.")));
+    }
+    // Median run-out per block (held-out runs).
+    if !base_hold.is_empty() {
+        let blocks: Vec<String> = {
+            let mut b: Vec<String> = base_hold.iter().map(|s| runs[s.run].block_id.clone()).collect();
+            b.sort();
+            b.dedup();
+            b
+        };
+        let med = |sims: &[RunSims], b: &str, observed: bool| {
+            let v: Vec<f64> = sims
+                .iter()
+                .filter(|s| runs[s.run].block_id == b)
+                .flat_map(|s| if observed { vec![runs[s.run].runout_m] } else { s.runouts() })
+                .collect();
+            super::stats::median(&v)
+        };
+        let o: Vec<f64> = blocks.iter().map(|b| med(base_hold, b, true)).collect();
+        let bs: Vec<f64> = blocks.iter().map(|b| med(base_hold, b, false)).collect();
+        let fs: Vec<f64> = blocks.iter().map(|b| med(final_hold, b, false)).collect();
+        let cats: Vec<&str> = blocks.iter().map(|s| s.as_str()).collect();
+        let mut chart = crate::render::bar_chart(
+            "Median run-out per block, held-out runs",
+            &cats,
+            &[("observed", &o), ("baseline", &bs), ("final", &fs)],
+        );
+        chart.y_label = "median run-out (m)".into();
+        chart.x_label = "block".into();
+        write_svg(&dir.join("runout_by_block.svg"), &chart)?;
+        figures.push((
+            "runout_by_block.svg".into(),
+            "Median observed and simulated run-out of each block on the held-out runs.".into(),
+        ));
+    }
+    // Residual against the strongest covariates.
+    if !base_cal.is_empty() {
+        let cov = covariates(model, base_cal);
+        let (r0, _) = residuals(model, base_cal);
+        let (r1, _) = residuals(model, final_cal);
+        let mut seen = Vec::new();
+        for d in report.diagnostics.iter().filter(|d| d.residual == "runout") {
+            if seen.len() >= 4 || seen.contains(&d.covariate) {
+                continue;
+            }
+            let Some(x) = cov.get(&d.covariate) else { continue };
+            seen.push(d.covariate.clone());
+            let chart = Chart {
+                title: format!(
+                    "Run-out residual vs {} (rho = {:.2}, p = {:.3})",
+                    d.covariate, d.spearman_rho, d.p_value
+                ),
+                x_label: d.covariate.clone(),
+                y_label: "observed - median simulated run-out (m)".into(),
+                series: vec![
+                    Series::new(
+                        "baseline",
+                        x.iter().copied().zip(r0.iter().copied()).collect(),
+                        SeriesStyle::Markers,
+                        CATEGORICAL[1],
+                    ),
+                    Series::new(
+                        "final",
+                        x.iter().copied().zip(r1.iter().copied()).collect(),
+                        SeriesStyle::Markers,
+                        CATEGORICAL[2],
+                    ),
+                ],
+                hlines: vec![(0.0, String::new())],
+                ..Default::default()
+            };
+            let name = format!("residual_vs_{}.svg", d.covariate);
+            write_svg(&dir.join(&name), &chart)?;
+            figures.push((
+                name,
+                format!("Calibration runs' run-out residuals against {}, baseline and final.", d.covariate),
+            ));
+        }
+    }
+    // Residual maps.
+    let frame = model.map_frame();
+    let zones: Vec<&Region> = report.effects_added.iter().filter_map(|e| e.region.as_ref()).collect();
+    for (stem, sims, what) in [("residual_map", base_cal, "baseline"), ("residual_map_final", final_cal, "final model")]
+    {
+        if sims.is_empty() {
+            continue;
+        }
+        let grid = residual_map(model, sims, &frame);
+        if frame.profile {
+            let pts: Vec<(f64, f64)> =
+                (0..grid.ncols).filter_map(|c| grid.get(c, 0).map(|v| (grid.cell_centre(c, 0).0, v as f64))).collect();
+            let chart = Chart {
+                title: format!("Run-out residual along the profile ({what})"),
+                x_label: "x (m)".into(),
+                y_label: "mean residual of runs passing (m)".into(),
+                series: vec![Series::new("residual", pts, SeriesStyle::LineMarkers, CATEGORICAL[0])],
+                hlines: vec![(0.0, String::new())],
+                vlines: zones
+                    .iter()
+                    .flat_map(|r| match r {
+                        Region::Interval([a, b]) => vec![(*a, "zone".to_string()), (*b, String::new())],
+                        _ => vec![],
+                    })
+                    .collect(),
+                ..Default::default()
+            };
+            write_svg(&dir.join(format!("{stem}.svg")), &chart)?;
+            figures.push((
+                format!("{stem}.svg"),
+                format!("Mean run-out residual of the calibration runs passing each point of the profile ({what})."),
+            ));
+            continue;
+        }
+        crate::io::geotiff::write_grid(&dir.join(format!("{stem}.tif")), &grid)?;
+        let mut layer = MapLayer::new(&grid, format!("Run-out residual, {what} (observed - simulated)"), "m");
+        layer.colormap = Colormap::Diverging;
+        layer.range = robust_range(&grid);
+        let overlays = Overlays {
+            points: sims.iter().map(|s| (runs[s.run].rest_m[0], runs[s.run].rest_m[1])).collect(),
+            point_label: Some("observed rest points".into()),
+            lines: zones
+                .iter()
+                .filter_map(|r| match r {
+                    Region::Polygon(p) => {
+                        let mut xy: Vec<(f64, f64)> = p.iter().map(|q| (q[0], q[1])).collect();
+                        xy.push(xy[0]);
+                        Some(OverlayLine { xy, colour: [20, 20, 20], width_px: 2.0, label: Some("zone".into()) })
+                    }
+                    _ => None,
+                })
+                .collect(),
+            ..Default::default()
+        };
+        render_map(&dir.join(format!("{stem}.png")), &layer, frame.dem.as_ref(), &overlays)?;
+        figures.push((format!("{stem}.png"), format!("Residual map ({what}): mean run-out residual of the calibration runs whose simulated paths cross each cell before their observed run-out (GeoTIFF: {stem}.tif).")));
+    }
+    if let Some(z) = zone {
+        if !frame.profile {
+            crate::io::geotiff::write_grid(&dir.join("deposition_excess.tif"), &z.excess)?;
+            let mut layer =
+                MapLayer::new(&z.excess, "Deposition excess (observed - simulated rest density)", "rests per cell");
+            layer.colormap = Colormap::Diverging;
+            layer.range = robust_range(&z.excess);
+            render_map(&dir.join("deposition_excess.png"), &layer, frame.dem.as_ref(), &Overlays::default())?;
+            figures.push((
+                "deposition_excess.png".into(),
+                format!("Deposition excess of the baseline (zone check p = {:.3}).", z.p_value),
+            ));
+        }
+    }
+    let md = markdown(report, &figures);
+    crate::io::write_bytes_atomic(&dir.join("report.md"), md.as_bytes())
+}
+
+/// `runs.csv`: one row per run with its set, group, observed run-out, the baseline's and the final model's median
+/// and 5–95 % run-out, residuals, and the covariates of the diagnosis (from the baseline).
+fn write_runs_csv(
+    path: &Path,
+    model: &dyn Model,
+    base_cal: &[RunSims],
+    final_cal: &[RunSims],
+    base_hold: &[RunSims],
+    final_hold: &[RunSims],
+) -> Result<()> {
+    use std::io::Write as _;
+    let runs = model.runs();
+    let base: Vec<&RunSims> = base_cal.iter().chain(base_hold).collect();
+    let fin: Vec<&RunSims> = final_cal.iter().chain(final_hold).collect();
+    let all_base: Vec<RunSims> = base.iter().map(|s| (*s).clone()).collect();
+    let cov = covariates(model, &all_base);
+    crate::io::write_atomic(path, |w| {
+        let io = |e| Error::io(path, e);
+        write!(w, "trajectory_id,set,block_id,group,observed_runout_m,baseline_median_m,baseline_p05_m,baseline_p95_m,final_median_m,final_p05_m,final_p95_m,final_residual_m").map_err(io)?;
+        for n in &cov.names {
+            write!(w, ",{n}").map_err(io)?;
+        }
+        writeln!(w).map_err(io)?;
+        for (k, (b, f)) in base.iter().zip(&fin).enumerate() {
+            let r = &runs[b.run];
+            let set = if k < base_cal.len() { "calibration" } else { "holdout" };
+            write!(
+                w,
+                "{},{set},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
+                r.id,
+                r.block_id,
+                model.group_names()[r.group],
+                r.runout_m,
+                b.median_runout(),
+                b.runout_quantile(0.05),
+                b.runout_quantile(0.95),
+                f.median_runout(),
+                f.runout_quantile(0.05),
+                f.runout_quantile(0.95),
+                r.runout_m - f.median_runout()
+            )
+            .map_err(io)?;
+            for c in &cov.values {
+                write!(w, ",{:.4}", c[k]).map_err(io)?;
+            }
+            writeln!(w).map_err(io)?;
+        }
+        Ok(())
+    })
+}
+
+/// A colour range symmetric about 0 at the 95th percentile of |value| (ours: one extreme cell would otherwise wash
+/// out the map).
+fn robust_range(g: &crate::raster::Grid) -> Option<(f32, f32)> {
+    let abs: Vec<f64> = g.values.iter().filter(|v| v.is_finite()).map(|v| v.abs() as f64).collect();
+    let q = super::stats::quantile_sorted(&super::stats::sorted(&abs), 0.95) as f32;
+    (q.is_finite() && q > 0.0).then_some((-q, q))
+}
+
+fn fmt(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:.2}")
+    } else {
+        "–".into()
+    }
+}
+
+/// Whether held-out metrics meet issue 5's aims: bias within ±3 m, W1 under 5 m, coverage in [0.8, 0.97], MAE
+/// within 20 % of the floor.
+pub fn aims(m: &Metrics) -> [bool; 4] {
+    [
+        m.runout_bias_m.abs() <= 3.0,
+        m.runout_w1_m < 5.0,
+        (0.8..=0.97).contains(&m.coverage_90),
+        m.runout_mae_m <= 1.2 * m.scatter_floor_mae_m,
+    ]
+}
+
+fn metrics_rows(s: &mut String, label: &str, m: &Metrics) {
+    let a = aims(m);
+    let mark = |ok: bool| if ok { "" } else { " ✗" };
+    let _ = writeln!(
+        s,
+        "| {label} | {} | {}{} | {}{} | {}{} | {}{} | {} | {} | {} |",
+        m.runs,
+        fmt(m.runout_mae_m),
+        mark(a[3]),
+        fmt(m.runout_w1_m),
+        mark(a[1]),
+        fmt(m.coverage_90),
+        mark(a[2]),
+        fmt(m.runout_bias_m),
+        mark(a[0]),
+        fmt(m.endpoint_mae_m),
+        fmt(m.scatter_floor_mae_m),
+        fmt(m.mae_over_floor())
+    );
+}
+
+/// The markdown report.
+pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Calibration report ({})\n", r.model);
+    let _ = writeln!(
+        s,
+        "{} calibration runs, {} held-out runs ({}). {} release groups. {} simulations in {:.0} s on {} threads.\n",
+        r.calibration_ids.len(),
+        r.holdout_ids.len(),
+        r.split,
+        r.release_groups.len(),
+        r.timing.simulations,
+        r.timing.total_s,
+        r.timing.threads
+    );
+    let _ = writeln!(s, "## Errors\n");
+    let _ = writeln!(s, "Run-out MAE, W1, bias and end-point MAE in metres; floor: the run-out MAE of the observed runs' own group median; ✗: misses the aim of issue 5 (bias within ±3 m, W1 < 5 m, coverage 0.8–0.97, MAE within 20 % of the floor).\n");
+    let _ = writeln!(s, "| model, runs | n | runout_mae_m | runout_w1_m | coverage_90 | runout_bias_m | endpoint_mae_m | floor | MAE/floor |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+    for (name, st) in [("baseline", &r.baseline), ("final", &r.final_stage)] {
+        metrics_rows(&mut s, &format!("{name}, held-out"), &st.holdout);
+        for (b, m) in &st.holdout_by_block {
+            metrics_rows(&mut s, &format!("{name}, held-out, block {b}"), m);
+        }
+        metrics_rows(&mut s, &format!("{name}, calibration"), &st.calibration);
+        for (b, m) in &st.calibration_by_block {
+            metrics_rows(&mut s, &format!("{name}, calibration, block {b}"), m);
+        }
+    }
+    let _ = writeln!(s, "\n## Parameters\n");
+    let _ = writeln!(s, "| parameter | baseline | final |");
+    let _ = writeln!(s, "|---|---|---|");
+    let mut names: Vec<&String> = r.baseline.parameters.0.keys().chain(r.final_stage.parameters.0.keys()).collect();
+    names.sort();
+    names.dedup();
+    for n in names {
+        let g = |p: &Params| p.get(n).map(|v| format!("{v:.4}")).unwrap_or_else(|| "–".into());
+        let _ = writeln!(s, "| {n} | {} | {} |", g(&r.baseline.parameters), g(&r.final_stage.parameters));
+    }
+    if !r.back_analysis.is_empty() {
+        let _ = writeln!(s, "\n## Per-run back-analysis (mean ± sd over calibration runs)\n");
+        let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds.\n");
+        let _ = writeln!(s, "| material | parameter | population fit | mean ± sd (n) | censored | per block |");
+        let _ = writeln!(s, "|---|---|---|---|---|---|");
+        for row in &r.back_analysis {
+            let blocks: Vec<String> =
+                row.by_block.iter().map(|(b, sp)| format!("{b}: {:.3} ± {:.3} ({})", sp.mean, sp.sd, sp.n)).collect();
+            let _ = writeln!(
+                s,
+                "| {} | {} | {:.3} | {:.3} ± {:.3} ({}) | {} | {} |",
+                row.material,
+                row.parameter,
+                row.population,
+                row.all.mean,
+                row.all.sd,
+                row.all.n,
+                row.censored,
+                blocks.join("; ")
+            );
+        }
+    }
+    let _ = writeln!(s, "\n## Effects loop\n");
+    if r.effects_added.is_empty() {
+        let _ = writeln!(s, "No effect was kept: none improved the cross-validated score clearly.\n");
+    }
+    for e in &r.effects_added {
+        let _ =
+            writeln!(s, "- **{}** kept: {}", e.label, e.evidence.get("formula").and_then(|v| v.as_str()).unwrap_or(""));
+        let params: Vec<String> = e.parameters.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect();
+        let _ = writeln!(s, "  parameters: {}", params.join(", "));
+    }
+    if !r.effects_tried.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nOut-of-fold scores inside the calibration runs (CRPS decides; run-out MAE shown beside it).\n"
+        );
+        let _ = writeln!(s, "| round | effect | proposed by | CV CRPS before (m) | after (m) | cut | p | CV MAE before → after (m) | kept |");
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+        for t in &r.effects_tried {
+            let by: Vec<String> = t
+                .proposed_by
+                .iter()
+                .map(|d| format!("{} (rho {:.2}, p {:.3})", d.covariate, d.spearman_rho, d.p_value))
+                .collect();
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} | {:.2} | {:.2} | {:+.1} % | {:.3} | {:.2} → {:.2} | {} |",
+                t.round,
+                t.label,
+                by.join("; "),
+                t.cv_crps_before_m,
+                t.cv_crps_after_m,
+                -100.0 * t.relative_improvement,
+                t.p_value,
+                t.cv_runout_mae_before_m,
+                t.cv_runout_mae_after_m,
+                if t.kept { "yes" } else { "no" }
+            );
+        }
+    }
+    let _ = writeln!(s, "\n## Residual diagnosis (baseline, calibration runs)\n");
+    if let Some((stat, p)) = r.zone_check {
+        let _ = writeln!(s, "Zone check (largest deposition excess {stat:.2}): p = {p:.3}.\n");
+    }
+    let _ = writeln!(s, "| covariate | residual | Spearman rho | p |");
+    let _ = writeln!(s, "|---|---|---|---|");
+    for d in r.diagnostics.iter().take(12) {
+        let _ = writeln!(s, "| {} | {} | {:.3} | {:.3} |", d.covariate, d.residual, d.spearman_rho, d.p_value);
+    }
+    let _ = writeln!(s, "\n## Figures\n");
+    for (f, caption) in figures {
+        let _ = writeln!(s, "![{caption}]({f})\n\n*{caption}*\n");
+    }
+    let _ = writeln!(s, "## Time\n");
+    let t = &r.timing;
+    let _ = writeln!(
+        s,
+        "Population fit {:.0} s, back-analysis {:.0} s, effects loop {:.0} s, final evaluation and report {:.0} s; total {:.0} s, {} simulations, {} threads.",
+        t.population_fit_s, t.back_analysis_s, t.effects_loop_s, t.final_evaluation_s, t.total_s, t.simulations, t.threads
+    );
+    s
+}

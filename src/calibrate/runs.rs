@@ -1,0 +1,143 @@
+//! The observed runs of a campaign, as calibration sees them: release state, block, observed rest point and the
+//! release group each run belongs to.
+//!
+//! **Release groups** (ours): runs of the same block whose release points chain together within
+//! `group_link_m` (single linkage). A group is what the field calls "repeated runs from one release point": at
+//! Tschamut each block was released again and again from one small area (data.md), which gives one group per block.
+//! The scatter floor and the group-wise objective compare a run only with its repeats, because runs of other blocks
+//! or from elsewhere are not repeats of it.
+
+use crate::campaign::Campaign;
+use crate::error::{Error, Result};
+use std::collections::BTreeMap;
+
+/// One observed run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FieldRun {
+    /// `trajectory_id`.
+    pub id: String,
+    /// Position in the campaign's release file: it keys the run's random streams, so a run gets the same
+    /// streams whatever subset it is simulated in.
+    pub index: usize,
+    /// Block id.
+    pub block_id: String,
+    /// Block mass, kg.
+    pub mass_kg: f64,
+    /// Block bounding sizes sorted longest first, m.
+    pub size_m: [f64; 3],
+    /// Release position of the centre of mass (campaign frame), m.
+    pub release_m: [f64; 3],
+    /// Initial velocity, m/s.
+    pub velocity_mps: [f64; 3],
+    /// Initial spin, rad/s.
+    pub spin_radps: [f64; 3],
+    /// Observed rest position, m.
+    pub rest_m: [f64; 3],
+    /// Observed run-out, m.
+    pub runout_m: f64,
+    /// Release group index.
+    pub group: usize,
+}
+
+impl FieldRun {
+    /// Elongation a/b of the sorted sizes (≥ 1).
+    pub fn elongation(&self) -> f64 {
+        self.size_m[0] / self.size_m[1]
+    }
+
+    /// Flatness b/c of the sorted sizes (≥ 1; a plate is flat).
+    pub fn flatness(&self) -> f64 {
+        self.size_m[1] / self.size_m[2]
+    }
+
+    /// Nominal size: the geometric mean of the three sizes, m.
+    pub fn size_nominal_m(&self) -> f64 {
+        (self.size_m[0] * self.size_m[1] * self.size_m[2]).cbrt()
+    }
+}
+
+/// The runs of a campaign that have an observed rest point, in file order, with their release groups; plus the
+/// group names (`block:k`).
+pub fn field_runs(campaign: &Campaign, group_link_m: f64) -> Result<(Vec<FieldRun>, Vec<String>)> {
+    let mut runs = Vec::new();
+    for (index, r) in campaign.releases.iter().enumerate() {
+        let Some(dep) = campaign.depositions.get(&r.trajectory_id) else { continue };
+        let block = &campaign.blocks[&r.block_id];
+        let mut size = block.size_m;
+        size.sort_by(|a, b| b.total_cmp(a));
+        runs.push(FieldRun {
+            id: r.trajectory_id.clone(),
+            index,
+            block_id: r.block_id.clone(),
+            mass_kg: block.mass_kg,
+            size_m: size,
+            release_m: r.position_m,
+            velocity_mps: r.velocity_mps,
+            spin_radps: r.spin_radps,
+            rest_m: dep.position_m,
+            runout_m: dep.runout_m,
+            group: 0,
+        });
+    }
+    if runs.len() < 6 {
+        return Err(Error::format(
+            campaign.dir.join("observed_deposition.csv").display().to_string(),
+            format!("only {} runs have an observed rest point", runs.len()),
+            "calibration needs at least 6 observed runs (and more to hold some out)",
+        ));
+    }
+    let names = assign_groups(&mut runs, group_link_m);
+    Ok((runs, names))
+}
+
+/// Single-linkage release groups within each block; returns the group names.
+pub fn assign_groups(runs: &mut [FieldRun], link_m: f64) -> Vec<String> {
+    let n = runs.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(p: &mut [usize], i: usize) -> usize {
+        let mut r = i;
+        while p[r] != r {
+            r = p[r];
+        }
+        let mut k = i;
+        while p[k] != r {
+            let next = p[k];
+            p[k] = r;
+            k = next;
+        }
+        r
+    }
+    for i in 0..n {
+        for j in i + 1..n {
+            if runs[i].block_id != runs[j].block_id {
+                continue;
+            }
+            let d = (runs[i].release_m[0] - runs[j].release_m[0]).hypot(runs[i].release_m[1] - runs[j].release_m[1]);
+            if d <= link_m {
+                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
+                if a != b {
+                    parent[a.max(b)] = a.min(b);
+                }
+            }
+        }
+    }
+    // Number groups in order of first appearance; name them block:k with k counting within the block.
+    let mut root_to_group: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut names = Vec::new();
+    let mut per_block: BTreeMap<String, usize> = BTreeMap::new();
+    for (i, run) in runs.iter_mut().enumerate() {
+        let root = find(&mut parent, i);
+        let g = match root_to_group.get(&root) {
+            Some(&g) => g,
+            None => {
+                let k = per_block.entry(run.block_id.clone()).or_insert(0);
+                *k += 1;
+                names.push(format!("{}:{}", run.block_id, k));
+                root_to_group.insert(root, names.len() - 1);
+                names.len() - 1
+            }
+        };
+        run.group = g;
+    }
+    names
+}

@@ -1,0 +1,471 @@
+//! Synthetic campaigns made with talus itself: a known model, optionally with an effect switched on that the
+//! calibration will not be told about, simulated once per run from streams the calibration never uses, plus
+//! measurement noise on the rest points. They test that calibration recovers what it should and that the effects
+//! loop names the hidden effect (and nothing when there is none).
+//!
+//! 3DRB: a 35° slope, a 20° apron and a 5° run-out plain, 160 m × 120 m; four release points across the slope with
+//! different drop heights (0.3 to 15 m); three cubic blocks of 20, 150 and 1200 kg. 2DLM: the same profile as a
+//! section, three release points, three masses.
+
+use super::effects::EffectKind;
+use super::model::{Model, Prepared};
+use super::model2d::Model2d;
+use super::model3d::Model3d;
+use super::params::{Candidate, EffectSpec, Params, Region};
+use super::runs::{assign_groups, FieldRun};
+use crate::error::Result;
+use crate::lumped2d::{Options2d, Profile};
+use crate::random::{standard_normal, stream, uniform, TruncNormal};
+use crate::rock::{RockBody, RockSize, ShapeKind};
+use crate::sim::SimParams;
+use crate::terrain::{Material, Terrain};
+use nalgebra::Vector3;
+use std::collections::BTreeMap;
+
+/// The effect hidden in a synthetic campaign.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Hidden {
+    /// None (a control campaign).
+    None,
+    /// Restitution falling with impact speed, K in m/s.
+    SpeedRestitution(f64),
+    /// Roughness felt relative to rock size, in m.
+    Roughness(f64),
+    /// Restitution scaling with mass, Cr' = Cr (m/150 kg)^−β, with β given.
+    MassRestitution(f64),
+    /// A soft zone: polygon (x, y) and its material (Cr mean, static °, dynamic °).
+    SoftZone(Vec<[f64; 2]>, [f64; 3]),
+}
+
+impl Hidden {
+    /// The effect kind the loop should name (None for a control).
+    pub fn kind(&self) -> Option<EffectKind> {
+        match self {
+            Hidden::None => None,
+            Hidden::SpeedRestitution(_) => Some(EffectKind::SpeedRestitution),
+            Hidden::Roughness(_) => Some(EffectKind::Roughness),
+            Hidden::MassRestitution(_) => Some(EffectKind::MassRestitution),
+            Hidden::SoftZone(..) => Some(EffectKind::Zone),
+        }
+    }
+
+    /// The zone polygon, if any.
+    pub fn polygon(&self) -> Option<&[[f64; 2]]> {
+        match self {
+            Hidden::SoftZone(p, _) => Some(p),
+            _ => None,
+        }
+    }
+}
+
+/// Size of a synthetic 3DRB campaign.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Synthetic3d {
+    /// Seed of the data (the calibration uses its own seed).
+    pub seed: u64,
+    /// Runs per release point and block.
+    pub runs_per_group: usize,
+    /// Release points used (1 to 4).
+    pub release_points: usize,
+    /// Blocks used (masses, kg).
+    pub masses_kg: Vec<f64>,
+    /// The hidden effect.
+    pub hidden: Hidden,
+    /// Standard deviation of the measurement noise on rest points, m.
+    pub noise_m: f64,
+    /// Terrain cell size, m.
+    pub cell_m: f64,
+    /// The slope profile down +x: (horizontal length m, angle °) pieces from x = 0; the last continues.
+    pub profile: Vec<(f64, f64)>,
+    /// A second profile for the northern half (y ≥ 65 m; blended linearly with `profile` over 55–65 m), if any.
+    pub north_profile: Option<Vec<(f64, f64)>>,
+    /// Release heights above the ground of the release points, m.
+    pub release_heights_m: Vec<f64>,
+    /// Release x of each release point, m (cycled over the points).
+    pub release_x_m: Vec<f64>,
+    /// The true material.
+    pub material: [f64; 4],
+    /// Initial speed down +x, drawn uniformly in [min, max], m/s.
+    pub release_speed_mps: [f64; 2],
+    /// Block shape: `cube`, `flat_box`, `smartie`, or `boulder` (a rounded 32-vertex hull, see [`boulder`]).
+    pub shape: String,
+}
+
+/// A rounded boulder: the convex hull of 32 points spread evenly over a sphere (Fibonacci lattice). Its rolling is
+/// far less chaotic than a cube's, which keeps the natural scatter of a synthetic campaign small next to the
+/// effect hidden in it.
+pub fn boulder() -> ShapeKind {
+    let n = 32;
+    let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
+    let points = (0..n)
+        .map(|i| {
+            let z = 1.0 - 2.0 * (i as f64 + 0.5) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let a = golden * i as f64;
+            [r * a.cos(), r * a.sin(), z]
+        })
+        .collect();
+    ShapeKind::Hull { name: "boulder".into(), points }
+}
+
+impl Default for Synthetic3d {
+    fn default() -> Self {
+        Synthetic3d {
+            seed: 1,
+            runs_per_group: 4,
+            release_points: 4,
+            masses_kg: vec![20.0, 150.0, 1200.0],
+            hidden: Hidden::None,
+            noise_m: 0.5,
+            cell_m: 5.0,
+            profile: vec![(30.0, 15.0), (1000.0, 0.0)],
+            north_profile: None,
+            release_heights_m: vec![0.5, 4.0, 10.0, 20.0],
+            release_x_m: vec![4.0],
+            material: TRUE_3D,
+            shape: "cube".into(),
+            release_speed_mps: [0.5, 1.5],
+        }
+    }
+}
+
+impl Synthetic3d {
+    /// Height of the ground at (x, y), m (80 m at x = 0).
+    pub fn height_m(&self, x: f64, y: f64) -> f64 {
+        let south = profile_height_m(&self.profile, x);
+        match &self.north_profile {
+            None => south,
+            Some(p) => {
+                let w = ((y - 55.0) / 10.0).clamp(0.0, 1.0);
+                (1.0 - w) * south + w * profile_height_m(p, x)
+            }
+        }
+    }
+}
+
+/// Height at x of a profile of (length, angle °) pieces starting at 80 m, m.
+pub fn profile_height_m(profile: &[(f64, f64)], x: f64) -> f64 {
+    let mut z = 80.0;
+    let mut x0 = 0.0;
+    for (k, &(len, deg)) in profile.iter().enumerate() {
+        let end = if k + 1 == profile.len() { f64::INFINITY } else { x0 + len };
+        z -= (x.clamp(x0, end) - x0) * deg.to_radians().tan();
+        x0 = end;
+    }
+    z
+}
+
+/// The true material of the synthetic terrain: Cr 0.35 ± 0.05, friction 40°/32°.
+pub const TRUE_3D: [f64; 4] = [0.35, 0.05, 40.0, 32.0];
+
+/// The standard synthetic 3DRB cases (ours, chosen so that the hidden effect moves run-outs by more than the
+/// campaign's own scatter, which is what a ≥ 30 % cut of the held-out MAE needs):
+/// - `speed` and `zone` (and `control_a`): rounded boulders; on the southern half they are thrown (3–4 m/s) off
+///   20 m high release points onto a flat plain, on the northern half they start 0.5 m above a 20 m long 20° apron
+///   that ends in the plain. Restitution Cr 0.6. `speed` hides Cr' = Cr/(1 + (v_n/6 m/s)²): the thrown blocks hit
+///   fast and lose almost everything, the rolling ones hit slowly and keep most. `zone` hides a soft patch (Cr 0.05,
+///   friction 55°/50°) where the blocks thrown from the southernmost point land ([`standard_zone`]).
+/// - `size` (and `control_b`): cubes dropped 0.5 to 20 m onto a 15° apron; `size` hides Cr' = Cr (m/150 kg)^0.4, so
+///   the 20 kg blocks bounce less and the 1200 kg ones more.
+pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
+    let two_regime = Synthetic3d {
+        seed,
+        runs_per_group: 6,
+        profile: vec![(1000.0, 0.0)],
+        north_profile: Some(vec![(20.0, 20.0), (1000.0, 0.0)]),
+        release_heights_m: vec![20.0, 20.0, 0.5, 0.5],
+        release_speed_mps: [3.0, 4.0],
+        material: [0.6, 0.02, 40.0, 32.0],
+        shape: "boulder".into(),
+        ..Default::default()
+    };
+    let drops = Synthetic3d { seed, runs_per_group: 6, material: [0.35, 0.02, 40.0, 32.0], ..Default::default() };
+    Some(match name {
+        "speed" => Synthetic3d { hidden: Hidden::SpeedRestitution(6.0), ..two_regime },
+        "zone" => Synthetic3d { hidden: Hidden::SoftZone(standard_zone(), [0.05, 55.0, 50.0]), ..two_regime },
+        "control_a" => two_regime,
+        "size" => Synthetic3d { hidden: Hidden::MassRestitution(-0.4), ..drops },
+        "control_b" => drops,
+        _ => return None,
+    })
+}
+
+/// The soft-zone polygon of the standard zone case: the plain below the southernmost release point only (so that no
+/// effect tied to the thrown blocks as such can stand in for it).
+pub fn standard_zone() -> Vec<[f64; 2]> {
+    vec![[6.0, 0.0], [40.0, 0.0], [40.0, 33.0], [6.0, 33.0]]
+}
+
+/// Builds the synthetic 3DRB campaign: the model (with the terrain's declared material only) and the runs'
+/// observed rest points made with the hidden effect on.
+pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
+    let mat = |name: &str, v: [f64; 4]| Material {
+        name: name.into(),
+        cr: TruncNormal::three_sigma(v[0], v[1], 0.0, 1.0),
+        static_friction_deg: v[2],
+        dynamic_friction_deg: v[3],
+    };
+    let n = (160.0 / spec.cell_m).round() as usize;
+    let terrain = Terrain::from_function(160.0, n, mat("default", spec.material), |x, y| spec.height_m(x, y))?;
+    let release_y = [20.0, 45.0, 70.0, 95.0];
+    let release_h = &spec.release_heights_m;
+    let mut bodies = BTreeMap::new();
+    for (k, &m) in spec.masses_kg.iter().enumerate() {
+        let shape = if spec.shape == "boulder" {
+            boulder()
+        } else {
+            ShapeKind::builtin(&spec.shape).unwrap_or(ShapeKind::Cube)
+        };
+        bodies.insert(
+            format!("b{}", k + 1),
+            RockBody::new(&shape, RockSize::Mass { mass_kg: m, density_kg_m3: 2650.0 }, "synthetic block")?,
+        );
+    }
+    let mut rng = stream(spec.seed, 7);
+    let mut runs = Vec::new();
+    for p in 0..spec.release_points.clamp(1, 4) {
+        for (b, body) in &bodies {
+            for _ in 0..spec.runs_per_group {
+                let (x, y) = (
+                    spec.release_x_m[p % spec.release_x_m.len()] + 2.0 * (uniform(&mut rng) - 0.5),
+                    release_y[p] + 2.0 * (uniform(&mut rng) - 0.5),
+                );
+                let z = spec.height_m(x, y) + release_h[p % release_h.len()] + body.bounding_radius_m;
+                let speed = spec.release_speed_mps[0]
+                    + (spec.release_speed_mps[1] - spec.release_speed_mps[0]) * uniform(&mut rng);
+                runs.push(FieldRun {
+                    id: format!("s{:03}", runs.len() + 1),
+                    index: runs.len(),
+                    block_id: b.clone(),
+                    mass_kg: body.mass_kg,
+                    size_m: body.extents_m,
+                    release_m: [x, y, z],
+                    velocity_mps: [speed, 0.0, 0.0],
+                    spin_radps: [0.0; 3],
+                    rest_m: [0.0; 3],
+                    runout_m: 0.0,
+                    group: 0,
+                });
+            }
+        }
+    }
+    let groups = assign_groups(&mut runs, 10.0);
+    // The truth: the terrain's material, plus the hidden effect.
+    let truth_runs = runs.clone();
+    let mut truth = Candidate { params: material_params_3d("default", spec.material), ..Default::default() };
+    match &spec.hidden {
+        Hidden::None => {}
+        Hidden::SpeedRestitution(k) => {
+            truth.params.set("hidden.k_mps", *k);
+            truth.effects.push(EffectSpec {
+                kind: EffectKind::SpeedRestitution,
+                label: "hidden".into(),
+                material: None,
+                region: None,
+            });
+        }
+        Hidden::Roughness(r) => {
+            truth.params.set("hidden.rough_m", *r);
+            truth.effects.push(EffectSpec {
+                kind: EffectKind::Roughness,
+                label: "hidden".into(),
+                material: None,
+                region: None,
+            });
+        }
+        Hidden::MassRestitution(b) => {
+            truth.params.set("hidden.exponent", *b);
+            truth.params.set("hidden.reference_kg", 150.0);
+            truth.effects.push(EffectSpec {
+                kind: EffectKind::MassRestitution,
+                label: "hidden".into(),
+                material: None,
+                region: None,
+            });
+        }
+        Hidden::SoftZone(poly, [cr, s, d]) => {
+            for (k, v) in material_params_3d("zonetrue", [*cr, 0.02, *s, *d]).0 {
+                truth.params.set(k, v);
+            }
+            truth.effects.push(EffectSpec {
+                kind: EffectKind::Zone,
+                label: "zonetrue".into(),
+                material: None,
+                region: Some(Region::Polygon(poly.clone())),
+            });
+        }
+    }
+    let truth_model =
+        Model3d::from_parts(truth_runs, groups.clone(), terrain.clone(), bodies.clone(), sim.clone(), None)?;
+    observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m)?;
+    Model3d::from_parts(runs, groups, terrain, bodies, sim, None)
+}
+
+/// The parameters of a 3DRB material `[cr_mean, cr_sd, static °, dynamic °]` under `name`.
+pub fn material_params_3d(name: &str, v: [f64; 4]) -> Params {
+    let mut p = Params::default();
+    for (k, x) in ["cr_mean", "cr_sd", "static_friction_deg", "dynamic_friction_deg"].iter().zip(v) {
+        p.set(format!("{name}.{k}"), x);
+    }
+    p
+}
+
+/// Simulates each run once under `truth` from data streams (seed + 1000, never used by calibration), adds noise,
+/// and stores the rest points and run-outs in `runs`.
+fn observe(model: &dyn Model, truth: &Candidate, runs: &mut [FieldRun], seed: u64, noise_m: f64) -> Result<()> {
+    let prepared: Box<dyn Prepared + '_> = model.prepare(truth)?;
+    let data_seed = seed.wrapping_add(1000);
+    let sims = crate::parallel::collect_in_order(runs.len(), 0, |i| prepared.simulate(&model.runs()[i], 0, data_seed));
+    let mut rng = stream(seed, 11);
+    let profile = model.kind() == super::config::ModelKind::Lumped2d;
+    for (r, s) in runs.iter_mut().zip(sims) {
+        let dx = noise_m * standard_normal(&mut rng);
+        let dy = if profile { 0.0 } else { noise_m * standard_normal(&mut rng) };
+        r.rest_m = [s.rest_m[0] + dx, s.rest_m[1] + dy, s.rest_m[2]];
+        r.runout_m = (r.rest_m[0] - r.release_m[0]).hypot(r.rest_m[1] - r.release_m[1]);
+    }
+    Ok(())
+}
+
+/// Size of a synthetic 2DLM campaign.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Synthetic2d {
+    /// Seed of the data.
+    pub seed: u64,
+    /// Runs per release point and mass.
+    pub runs_per_group: usize,
+    /// Masses, kg.
+    pub masses_kg: Vec<f64>,
+    /// Hidden effect: `None`, `SpeedRestitution` (Pfeiffer–Bowen on), or `SoftZone` with an interval
+    /// `[[x0, 0], [x1, 0]]` and its (Rn, Rt, friction °).
+    pub hidden: Hidden,
+    /// Noise on rest x, m.
+    pub noise_m: f64,
+    /// The profile: (horizontal length m, angle °) pieces from x = 0 (80 m high), to x = 200 m.
+    pub profile: Vec<(f64, f64)>,
+    /// Release points: (x, height above the profile), m.
+    pub releases: Vec<(f64, f64)>,
+}
+
+impl Default for Synthetic2d {
+    fn default() -> Self {
+        Synthetic2d {
+            seed: 1,
+            runs_per_group: 6,
+            masses_kg: vec![50.0, 500.0, 5000.0],
+            hidden: Hidden::None,
+            noise_m: 0.5,
+            profile: vec![(30.0, 15.0), (1000.0, 0.0)],
+            releases: vec![(3.0, 0.5), (6.0, 5.0), (9.0, 15.0)],
+        }
+    }
+}
+
+/// The true 2DLM material: Rn 0.35 ± 0.04, Rt 0.80 ± 0.04, friction 32°, roughness 3°.
+pub const TRUE_2D: [f64; 6] = [0.35, 0.04, 0.80, 0.04, 32.0, 3.0];
+
+/// The parameters of a 2DLM material `[rn, rn_sd, rt, rt_sd, friction °, roughness °]` under `name`.
+pub fn material_params_2d(name: &str, v: [f64; 6]) -> Params {
+    let mut p = Params::default();
+    for (k, x) in ["rn_mean", "rn_sd", "rt_mean", "rt_sd", "friction_angle_deg", "roughness_sd_deg"].iter().zip(v) {
+        p.set(format!("{name}.{k}"), x);
+    }
+    p
+}
+
+/// A synthetic profile of (length, angle °) pieces (one material, `ground`), 0 to 200 m.
+pub fn synthetic_profile(pieces: &[(f64, f64)]) -> Result<Profile> {
+    let mut xs = vec![0.0];
+    for (len, _) in pieces {
+        let next = xs.last().copied().unwrap_or(0.0) + len;
+        if next >= 200.0 {
+            break;
+        }
+        xs.push(next);
+    }
+    xs.push(200.0);
+    let v: Vec<[f64; 2]> = xs.iter().map(|&x| [x, profile_height_m(pieces, x)]).collect();
+    Profile::new(&v, vec![0; v.len() - 1], vec!["ground".into()], "synthetic profile")
+}
+
+/// Builds the synthetic 2DLM campaign.
+pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
+    let profile = synthetic_profile(&spec.profile)?;
+    let mut rng = stream(spec.seed, 7);
+    let mut runs = Vec::new();
+    for &(x0, h) in &spec.releases {
+        for (k, &m) in spec.masses_kg.iter().enumerate() {
+            for _ in 0..spec.runs_per_group {
+                let x = x0 + (uniform(&mut rng) - 0.5);
+                let z = profile_height_m(&spec.profile, x) + h;
+                let size = (m / 2650.0).cbrt();
+                runs.push(FieldRun {
+                    id: format!("p{:03}", runs.len() + 1),
+                    index: runs.len(),
+                    block_id: format!("m{}", k + 1),
+                    mass_kg: m,
+                    size_m: [size; 3],
+                    release_m: [x, 0.0, z],
+                    velocity_mps: [0.5 + uniform(&mut rng), 0.0, 0.0],
+                    spin_radps: [0.0; 3],
+                    rest_m: [0.0; 3],
+                    runout_m: 0.0,
+                    group: 0,
+                });
+            }
+        }
+    }
+    let groups = assign_groups(&mut runs, 2.0);
+    let mut truth = Candidate { params: material_params_2d("ground", TRUE_2D), effects: Vec::new() };
+    match &spec.hidden {
+        Hidden::None | Hidden::Roughness(_) | Hidden::MassRestitution(_) => {}
+        Hidden::SpeedRestitution(_) => truth.effects.push(EffectSpec {
+            kind: EffectKind::SpeedRestitution,
+            label: "hidden".into(),
+            material: None,
+            region: None,
+        }),
+        Hidden::SoftZone(iv, [rn, rt, f]) => {
+            for (k, v) in material_params_2d("zonetrue", [*rn, 0.02, *rt, 0.02, *f, 3.0]).0 {
+                truth.params.set(k, v);
+            }
+            truth.effects.push(EffectSpec {
+                kind: EffectKind::Zone,
+                label: "zonetrue".into(),
+                material: None,
+                region: Some(Region::Interval([iv[0][0], iv[1][0]])),
+            });
+        }
+    }
+    let truth_model = Model2d::from_parts(runs.clone(), groups.clone(), profile.clone(), options.clone())?;
+    observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m)?;
+    Model2d::from_parts(runs, groups, profile, options)
+}
+
+/// Share of `polygon`'s area that lies inside `truth` (estimated on a 40 × 40 lattice over the polygon's bounding
+/// box), and whether the polygon's centroid lies inside `truth`.
+pub fn zone_overlap(polygon: &[[f64; 2]], truth: &[[f64; 2]]) -> (f64, bool) {
+    let r = Region::Polygon(polygon.to_vec());
+    let [x0, y0, x1, y1] = r.bbox();
+    let (mut inside, mut both) = (0usize, 0usize);
+    let (mut cx, mut cy) = (0.0, 0.0);
+    for a in 0..40 {
+        for b in 0..40 {
+            let x = x0 + (a as f64 + 0.5) / 40.0 * (x1 - x0);
+            let y = y0 + (b as f64 + 0.5) / 40.0 * (y1 - y0);
+            if r.contains(x, y) {
+                inside += 1;
+                cx += x;
+                cy += y;
+                if crate::terrain::point_in_polygon(x, y, truth) {
+                    both += 1;
+                }
+            }
+        }
+    }
+    if inside == 0 {
+        return (0.0, false);
+    }
+    let c = Vector3::new(cx / inside as f64, cy / inside as f64, 0.0);
+    (both as f64 / inside as f64, crate::terrain::point_in_polygon(c.x, c.y, truth))
+}

@@ -1,0 +1,134 @@
+//! `talus calibrate`.
+
+use anyhow::Context;
+use clap::Args;
+use std::path::PathBuf;
+use std::time::Instant;
+use talus::calibrate::{self, split, CalibrationConfig, ModelKind};
+
+/// Calibrate a model on a field campaign, measure it on held-out runs, and add the effects it lacks.
+///
+/// Writes DIR/report.json, DIR/report.md, charts and residual maps. With --kfold, runs an outer k-fold
+/// cross-validation over all runs instead (DIR/fold_i/ and DIR/cv_report.json).
+///
+/// Example:
+///   talus calibrate meshes/tschamut2014 --terrain meshes/tschamut2014/terrain_proxy.asc --model 3drb
+///       --config examples/tschamut_calibrate.toml --out outputs/tschamut_calibration
+#[derive(Debug, Args)]
+pub struct CalibrateArgs {
+    /// Campaign folder (release_points.csv, observed_deposition.csv, block_metadata.csv).
+    campaign: PathBuf,
+    /// Terrain file (3drb: OBJ, STL, GeoTIFF or ESRI ASCII DEM) or profile CSV (2dlm).
+    #[arg(long)]
+    terrain: PathBuf,
+    /// Engine: 3drb or 2dlm.
+    #[arg(long, default_value = "3drb")]
+    model: String,
+    /// File of held-out trajectory_ids, one per line (default: a seeded split, see holdout_fraction).
+    #[arg(long)]
+    holdout: Option<PathBuf>,
+    /// Settings file (TOML): free parameters and bounds, material map, repeats, seed, folds, effects.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Output folder (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Seed (overrides the settings).
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Simulations per run for the reported metrics (overrides the settings; default 20).
+    #[arg(long)]
+    repeats: Option<usize>,
+    /// Threads (default: all cores). Results do not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Outer k-fold cross-validation over all runs (K folds; `--kfold` alone uses outer_folds from the settings).
+    #[arg(long, num_args = 0..=1, default_missing_value = "0")]
+    kfold: Option<usize>,
+}
+
+pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
+    let kind = ModelKind::parse(&a.model)?;
+    let (mut cfg, source) = match &a.config {
+        Some(p) => (CalibrationConfig::read(p)?, p.display().to_string()),
+        None => (CalibrationConfig::default(), "settings".to_string()),
+    };
+    if let Some(s) = a.seed {
+        cfg.seed = s;
+    }
+    if let Some(r) = a.repeats {
+        cfg.repeats = r;
+    }
+    if let Some(t) = a.threads {
+        if t == 0 {
+            anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)");
+        }
+        cfg.threads = t;
+    }
+    cfg.validate(&source)?;
+    let model = calibrate::open_model(&a.campaign, &a.terrain, kind, &cfg, &source)
+        .with_context(|| format!("reading {}", a.campaign.display()))?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let t0 = Instant::now();
+    let log = move |msg: &str| eprintln!("[{:6.1} s] {msg}", t0.elapsed().as_secs_f64());
+    let runs = model.runs();
+    if let Some(k) = a.kfold {
+        if a.holdout.is_some() {
+            anyhow::bail!("--kfold and --holdout exclude each other: the k-fold study holds out every run once");
+        }
+        let k = if k == 0 { cfg.outer_folds } else { k };
+        if k < 2 || k > runs.len() {
+            anyhow::bail!("--kfold: must be between 2 and the number of runs ({})", runs.len());
+        }
+        let cv = calibrate::cross_validate(model.as_ref(), &cfg, k, &a.out, &log)?;
+        let (b, f) = (&cv.baseline.overall, &cv.final_set.overall);
+        println!("outer {k}-fold cross-validation over {} runs in {:.0} s", b.runs, cv.total_s);
+        println!("held-out runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m, runout_w1_m {:.2} -> {:.2} m, coverage_90 {:.2} -> {:.2}", b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, b.runout_w1_m, f.runout_w1_m, b.coverage_90, f.coverage_90);
+        println!("wrote {}", a.out.join("cv_report.md").display());
+        return Ok(());
+    }
+    let (cal, hold, note) = match &a.holdout {
+        Some(p) => {
+            let hold = split::read_holdout(p, runs)?;
+            let cal: Vec<usize> = (0..runs.len()).filter(|i| !hold.contains(i)).collect();
+            (cal, hold, format!("held-out runs from {}", p.display()))
+        }
+        None => {
+            let (cal, hold) = split::seeded_split(runs, cfg.holdout_fraction, cfg.seed);
+            (
+                cal,
+                hold,
+                format!(
+                    "seeded split: about {:.0} % of each release group held out, seed {}",
+                    100.0 * cfg.holdout_fraction,
+                    cfg.seed
+                ),
+            )
+        }
+    };
+    if a.holdout.is_none() {
+        let ids: Vec<&str> = hold.iter().map(|&i| runs[i].id.as_str()).collect();
+        eprintln!("{note}: {}", ids.join(" "));
+    }
+    let c = calibrate::calibrate(model.as_ref(), &cfg, &cal, &hold, &note, Some(&a.out), &log)?;
+    let r = &c.report;
+    let (b, f) = (&r.baseline.holdout, &r.final_stage.holdout);
+    println!(
+        "{} calibration runs, {} held out; {} simulations in {:.0} s",
+        cal.len(),
+        hold.len(),
+        r.timing.simulations,
+        r.timing.total_s
+    );
+    println!(
+        "effects added: {}",
+        if r.effects_added.is_empty() {
+            "none".to_string()
+        } else {
+            r.effects_added.iter().map(|e| e.label.clone()).collect::<Vec<_>>().join(", ")
+        }
+    );
+    println!("held-out runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m, runout_w1_m {:.2} -> {:.2} m, coverage_90 {:.2} -> {:.2}", b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, b.runout_w1_m, f.runout_w1_m, b.coverage_90, f.coverage_90);
+    println!("wrote {}", a.out.join("report.md").display());
+    Ok(())
+}

@@ -1,0 +1,214 @@
+//! `talus calibrate` on synthetic campaigns made with talus itself (small versions of the study in
+//! `examples/calibration_study.rs`; the figures of the full study are in docs/calibration.md).
+
+use talus::calibrate::config::{CalibrationConfig, ModelKind, ParamSetting};
+use talus::calibrate::effects::EffectKind;
+use talus::calibrate::synthetic::{synthetic_2d, synthetic_3d, Synthetic2d, Synthetic3d, TRUE_2D};
+use talus::calibrate::{calibrate, split, Model};
+use talus::lumped2d::Options2d;
+use talus::sim::SimParams;
+
+fn quiet(_: &str) {}
+
+/// Settings for the 2DLM tests: friction and roughness free, spreads fixed at the truth.
+fn config_2d() -> CalibrationConfig {
+    let mut cfg = CalibrationConfig::default();
+    let m = cfg.materials.entry("ground".into()).or_default();
+    m.insert("rn_sd".into(), ParamSetting::Fixed(TRUE_2D[1]));
+    m.insert("rt_sd".into(), ParamSetting::Fixed(TRUE_2D[3]));
+    m.insert("roughness_sd_deg".into(), ParamSetting::Fixed(TRUE_2D[5]));
+    cfg
+}
+
+#[test]
+fn profile_campaign_recovers_rn_rt_and_friction() {
+    let model =
+        synthetic_2d(&Synthetic2d { seed: 4, runs_per_group: 6, ..Default::default() }, Options2d::default()).unwrap();
+    let cfg = config_2d();
+    let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+    let c = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap();
+    let p = &c.report.baseline.parameters;
+    let (rn, rt, phi) = (
+        p.get("ground.rn_mean").unwrap(),
+        p.get("ground.rt_mean").unwrap(),
+        p.get("ground.friction_angle_deg").unwrap(),
+    );
+    assert!((rn - TRUE_2D[0]).abs() < 0.12, "Rn {rn}");
+    assert!((rt - TRUE_2D[2]).abs() < 0.08, "Rt {rt}");
+    assert!((phi - TRUE_2D[4]).abs() < 6.0, "friction {phi}");
+    // Per-run back-analysis: mean ± sd for each free parameter, the means near the truth.
+    let rows = &c.report.back_analysis;
+    assert_eq!(rows.len(), 3);
+    for r in rows {
+        assert!(r.all.n >= 10 && r.all.sd.is_finite(), "{r:?}");
+    }
+    let rt_row = rows.iter().find(|r| r.parameter == "rt_mean").unwrap();
+    assert!((rt_row.all.mean - TRUE_2D[2]).abs() < 0.1, "{rt_row:?}");
+    assert!(c.report.effects_added.is_empty(), "{:?}", c.report.effects_added);
+}
+
+#[test]
+fn profile_loop_runs_and_adds_nothing_without_a_hidden_effect() {
+    let cfg = config_2d();
+    for seed in [1, 2, 3] {
+        let model = synthetic_2d(&Synthetic2d { seed, ..Default::default() }, Options2d::default()).unwrap();
+        let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+        let c = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap();
+        assert!(c.report.effects_added.is_empty(), "seed {seed}: {:#?}", c.report.effects_tried);
+        assert!(c.report.final_stage.holdout.runout_mae_m.is_finite());
+    }
+}
+
+/// Tiny settings for the 3DRB tests (the engine runs in a debug build here).
+fn tiny_3d() -> CalibrationConfig {
+    let mut cfg =
+        CalibrationConfig { repeats: 6, search_repeats: 2, max_evaluations: 12, inner_folds: 3, ..Default::default() };
+    cfg.effects.max_rounds = 1;
+    cfg.effects.max_proposals = 2;
+    cfg.effects.refit_evaluations = 6;
+    cfg.effects.cv_refit_evaluations = 6;
+    cfg.effects.permutations = 199;
+    cfg.back_analysis.grid_points = 3;
+    cfg
+}
+
+#[test]
+fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
+    let spec = Synthetic3d { runs_per_group: 2, release_points: 2, masses_kg: vec![50.0, 400.0], ..Default::default() };
+    let model = synthetic_3d(&spec, SimParams::default()).unwrap();
+    assert_eq!(model.kind(), ModelKind::Rigid3d);
+    let mut cfg = tiny_3d();
+    let (cal, hold) = split::seeded_split(model.runs(), 0.25, cfg.seed);
+    let dir = tempfile::tempdir().unwrap();
+    cfg.threads = 1;
+    let one = calibrate(&model, &cfg, &cal, &hold, "seeded", Some(dir.path()), &quiet).unwrap();
+    cfg.threads = 2;
+    let two = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap();
+    assert_eq!(one.report.baseline.parameters, two.report.baseline.parameters);
+    assert_eq!(
+        one.report.final_stage.holdout.runout_mae_m.to_bits(),
+        two.report.final_stage.holdout.runout_mae_m.to_bits()
+    );
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("report.json")).unwrap()).unwrap();
+    for key in ["model", "calibration_ids", "holdout_ids", "baseline", "final", "effects_added", "diagnostics"] {
+        assert!(json.get(key).is_some(), "report.json lacks {key}");
+    }
+    for stage in ["baseline", "final"] {
+        for set in ["calibration", "holdout"] {
+            let m = &json[stage][set];
+            for k in ["runout_mae_m", "runout_w1_m", "endpoint_mae_m", "coverage_90", "runout_bias_m"] {
+                assert!(m.get(k).is_some(), "{stage}.{set} lacks {k}");
+            }
+        }
+        assert!(json[stage]["parameters"].get("default.cr_mean").is_some());
+    }
+    let d = &json["diagnostics"][0];
+    assert!(d.get("covariate").is_some() && d.get("spearman_rho").is_some() && d.get("p_value").is_some());
+    for f in [
+        "report.md",
+        "runs.csv",
+        "residual_map.tif",
+        "residual_map.png",
+        "runout_calibration.svg",
+        "runout_holdout.svg",
+    ] {
+        assert!(dir.path().join(f).is_file(), "missing {f}");
+    }
+    assert_eq!(json["holdout_ids"].as_array().unwrap().len(), hold.len());
+}
+
+#[test]
+fn rigid_body_loop_finds_a_hidden_soft_zone() {
+    // Boulders thrown onto a plain; a soft patch under the southern release points (the `zone` case of the study,
+    // smaller).
+    let spec = talus::calibrate::synthetic::case_3d("zone", 3).unwrap();
+    let spec = Synthetic3d { runs_per_group: 6, masses_kg: vec![150.0], ..spec };
+    let model = synthetic_3d(&spec, SimParams::default()).unwrap();
+    let mut cfg = tiny_3d();
+    cfg.effects.candidates = vec!["zone".into(), "speed_restitution".into()];
+    cfg.effects.alpha = 0.05;
+    let (cal, hold) = split::seeded_split(model.runs(), 0.25, cfg.seed);
+    let c = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap();
+    let r = &c.report;
+    let zone = r.effects_added.iter().find(|e| e.name == "zone");
+    assert!(zone.is_some(), "{:#?}", r.effects_tried);
+    let Some(talus::calibrate::params::Region::Polygon(p)) = &zone.unwrap().region else {
+        panic!("zone without polygon")
+    };
+    let (share, centre_inside) = talus::calibrate::synthetic::zone_overlap(p, spec.hidden.polygon().unwrap());
+    assert!(share > 0.5 || centre_inside, "zone overlap {share}");
+    assert_eq!(spec.hidden.kind(), Some(EffectKind::Zone));
+}
+
+/// Writes a synthetic profile campaign (no `y_m` column) and its `profile.csv` into `dir`.
+fn write_profile_campaign(dir: &std::path::Path) {
+    let model =
+        synthetic_2d(&Synthetic2d { seed: 5, runs_per_group: 3, ..Default::default() }, Options2d::default()).unwrap();
+    let mut rel = String::from("trajectory_id,x_m,z_m,vx_mps,vz_mps,block_id\n");
+    let mut dep = String::from("trajectory_id,x_m,z_m\n");
+    let mut blocks = std::collections::BTreeMap::new();
+    for r in model.runs() {
+        rel += &format!(
+            "{},{},{},{},{},{}\n",
+            r.id, r.release_m[0], r.release_m[2], r.velocity_mps[0], r.velocity_mps[2], r.block_id
+        );
+        dep += &format!("{},{},{}\n", r.id, r.rest_m[0], r.rest_m[2]);
+        blocks.insert(r.block_id.clone(), (r.mass_kg, r.size_m));
+    }
+    let mut blk = String::from("block_id,mass_kg,size_x_m,size_y_m,size_z_m\n");
+    for (b, (m, s)) in blocks {
+        blk += &format!("{b},{m},{},{},{}\n", s[0], s[1], s[2]);
+    }
+    std::fs::write(dir.join("release_points.csv"), rel).unwrap();
+    std::fs::write(dir.join("observed_deposition.csv"), dep).unwrap();
+    std::fs::write(dir.join("block_metadata.csv"), blk).unwrap();
+    talus::calibrate::synthetic::synthetic_profile(&Synthetic2d::default().profile)
+        .unwrap()
+        .write_csv(&dir.join("profile.csv"))
+        .unwrap();
+}
+
+#[test]
+fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_code_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_profile_campaign(d);
+    std::fs::write(
+        d.join("settings.toml"),
+        "max_evaluations = 20\n[back_analysis]\nenabled = false\n[effects]\nmax_rounds = 1\n",
+    )
+    .unwrap();
+    std::fs::write(d.join("holdout.txt"), "# held out\np001\np010\np019\n").unwrap();
+    let talus = env!("CARGO_BIN_EXE_talus");
+    let run = |extra: &[&str]| {
+        let mut c = std::process::Command::new(talus);
+        c.arg("calibrate")
+            .arg(d)
+            .arg("--terrain")
+            .arg(d.join("profile.csv"))
+            .args(["--model", "2dlm", "--config"])
+            .arg(d.join("settings.toml"));
+        c.args(extra);
+        c.output().unwrap()
+    };
+    let out = d.join("out");
+    let o = run(&["--holdout", d.join("holdout.txt").to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["model"], "2dlm");
+    assert_eq!(json["holdout_ids"], serde_json::json!(["p001", "p010", "p019"]));
+    assert!(out.join("report.md").is_file() && out.join("residual_map.svg").is_file());
+    // An id that is not in the campaign: exit 2, and the message names the file and line.
+    std::fs::write(d.join("bad.txt"), "p001\nnope\n").unwrap();
+    let o = run(&["--holdout", d.join("bad.txt").to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("bad.txt:2") && err.contains("nope"), "{err}");
+    // An unknown settings key: exit 2, named.
+    std::fs::write(d.join("settings.toml"), "repeatz = 3\n").unwrap();
+    let o = run(&["--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("repeatz"));
+}
