@@ -7,7 +7,7 @@
 //! 2d_zone 2d_control; default: all)
 use std::time::Instant;
 use talus::calibrate::synthetic::{case_3d, synthetic_2d, synthetic_3d, zone_overlap, Hidden, Synthetic2d};
-use talus::calibrate::{self, effects::family, params::Region, split, CalibrationConfig, Model};
+use talus::calibrate::{self, params::Region, split, CalibrationConfig, Model};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
 
@@ -89,9 +89,7 @@ fn main() {
             (None, None) => true,
             (Some(k), Some(e)) => {
                 r.effects_tried.iter().any(|t| t.kept && t.label == e.label)
-                    && calibrate::effects::by_name(model.kind(), &e.name)
-                        .map(|d| family(d.kind) == family(k))
-                        .unwrap_or(false)
+                    && calibrate::effects::by_name(model.kind(), &e.name).map(|d| d.kind == k).unwrap_or(false)
             }
             _ => false,
         };

@@ -232,7 +232,11 @@ impl Campaign {
                         "fix the trajectory_id",
                     ));
                 };
-                let p = [dep.number(row, x, "x_m")?, dep.optional_number(row, "y_m")?.unwrap_or(0.0), dep.number(row, z, "z_m")?];
+                let p = [
+                    dep.number(row, x, "x_m")?,
+                    dep.optional_number(row, "y_m")?.unwrap_or(0.0),
+                    dep.number(row, z, "z_m")?,
+                ];
                 let computed = ((p[0] - rel.position_m[0]).powi(2) + (p[1] - rel.position_m[1]).powi(2)).sqrt();
                 let runout_m = dep.optional_number(row, "observed_runout_m")?.unwrap_or(computed);
                 depositions.insert(tid.clone(), Deposition { trajectory_id: tid, position_m: p, runout_m });

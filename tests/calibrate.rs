@@ -2,8 +2,8 @@
 //! `examples/calibration_study.rs`; the figures of the full study are in docs/calibration.md).
 
 use talus::calibrate::config::{CalibrationConfig, ModelKind, ParamSetting};
-use talus::calibrate::effects::EffectKind;
-use talus::calibrate::synthetic::{synthetic_2d, synthetic_3d, Synthetic2d, Synthetic3d, TRUE_2D};
+use talus::calibrate::params::Region;
+use talus::calibrate::synthetic::{steep_2d, synthetic_2d, synthetic_3d, Hidden, Synthetic2d, Synthetic3d, TRUE_2D};
 use talus::calibrate::{calibrate, split, Model};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
@@ -51,7 +51,7 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
 fn profile_loop_runs_and_adds_nothing_without_a_hidden_effect() {
     let cfg = config_2d();
     for seed in [1, 2, 3] {
-        let model = synthetic_2d(&Synthetic2d { seed, ..Default::default() }, Options2d::default()).unwrap();
+        let model = synthetic_2d(&Synthetic2d { seed, ..steep_2d() }, Options2d::default()).unwrap();
         let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
         let c = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap();
         assert!(c.report.effects_added.is_empty(), "seed {seed}: {:#?}", c.report.effects_tried);
@@ -118,27 +118,27 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
     assert_eq!(json["holdout_ids"].as_array().unwrap().len(), hold.len());
 }
 
-#[test]
-fn rigid_body_loop_finds_a_hidden_soft_zone() {
-    // Boulders thrown onto a plain; a soft patch under the southern release points (the `zone` case of the study,
-    // smaller).
-    let spec = talus::calibrate::synthetic::case_3d("zone", 3).unwrap();
-    let spec = Synthetic3d { runs_per_group: 6, masses_kg: vec![150.0], ..spec };
-    let model = synthetic_3d(&spec, SimParams::default()).unwrap();
-    let mut cfg = tiny_3d();
-    cfg.effects.candidates = vec!["zone".into(), "speed_restitution".into()];
-    cfg.effects.alpha = 0.05;
-    let (cal, hold) = split::seeded_split(model.runs(), 0.25, cfg.seed);
+/// Calibrates a synthetic profile campaign with `hidden` switched on (and undeclared); returns the report and the
+/// held-out run-out MAE before and after the loop.
+fn profile_case(hidden: Hidden) -> talus::calibrate::report::Report {
+    let cfg = config_2d();
+    let model = synthetic_2d(&Synthetic2d { seed: 2, hidden, ..steep_2d() }, Options2d::default()).unwrap();
+    let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
     let c = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap();
-    let r = &c.report;
-    let zone = r.effects_added.iter().find(|e| e.name == "zone");
-    assert!(zone.is_some(), "{:#?}", r.effects_tried);
-    let Some(talus::calibrate::params::Region::Polygon(p)) = &zone.unwrap().region else {
-        panic!("zone without polygon")
+    c.report
+}
+
+#[test]
+fn profile_loop_finds_a_hidden_soft_zone() {
+    // A soft patch (Rn 0.1, Rt 0.5, friction 55°) around the uppermost release point stops its rocks; undeclared.
+    let r = profile_case(Hidden::SoftZone(vec![[2.0, 0.0], [9.0, 0.0]], [0.1, 0.5, 55.0]));
+    let zone = r.effects_added.first().filter(|e| e.name == "zone");
+    let Some(Region::Interval([a, b])) = zone.and_then(|e| e.region.clone()) else {
+        panic!("no zone found: {:#?}", r.effects_tried)
     };
-    let (share, centre_inside) = talus::calibrate::synthetic::zone_overlap(p, spec.hidden.polygon().unwrap());
-    assert!(share > 0.5 || centre_inside, "zone overlap {share}");
-    assert_eq!(spec.hidden.kind(), Some(EffectKind::Zone));
+    assert!(a < 9.0 && b > 2.0 && b - a < 20.0, "zone [{a}, {b}] misses the hidden one at [2, 9]");
+    let (before, after) = (r.baseline.holdout.runout_mae_m, r.final_stage.holdout.runout_mae_m);
+    assert!(after < 0.7 * before, "held-out MAE {before:.2} -> {after:.2} m: cut under 30 %");
 }
 
 /// Writes a synthetic profile campaign (no `y_m` column) and its `profile.csv` into `dir`.

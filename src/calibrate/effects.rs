@@ -183,14 +183,3 @@ pub fn definition(model: ModelKind, kind: EffectKind) -> Option<&'static EffectD
 pub fn by_name(model: ModelKind, name: &str) -> Option<&'static EffectDef> {
     effects_for(model).iter().find(|d| d.name == name)
 }
-
-/// Families of effects that one hidden cause can look like (used to say whether the loop named "the right
-/// effect"): restitution versus speed, versus size or mass, and place-bound effects.
-pub fn family(kind: EffectKind) -> &'static str {
-    match kind {
-        EffectKind::SpeedRestitution | EffectKind::AngleRestitution => "impact",
-        EffectKind::MassRestitution | EffectKind::Roughness | EffectKind::CrspRotation => "size",
-        EffectKind::RollingResistance => "rolling",
-        EffectKind::SoftDrag | EffectKind::Zone => "place",
-    }
-}

@@ -155,12 +155,18 @@ pub fn effects_loop(
         let zone_allowed = allowed.iter().any(|d| d.kind == EffectKind::Zone);
         let zc = zone_allowed.then(|| zone_check(model, &diag_sims, &frame, 199, cfg.seed.wrapping_add(round as u64)));
         out.zone_p.push(zc.as_ref().map(|z| z.p_value));
+        if let Some(z) = &zc {
+            (ctx.log)(&format!(
+                "effects loop, round {round}: zone check p = {:.3} (largest deposition excess {:.3})",
+                z.p_value, z.statistic
+            ));
+        }
         let proposals = propose(
             ctx,
             &allowed,
             &current,
             &diags,
-            zc.as_ref().map(|z| (z.p_value, z.statistic, z.region.is_some())),
+            zc.as_ref().map(|z| (z.p_value, z.statistic, !z.regions.is_empty())),
             round,
         );
         if proposals.is_empty() {
@@ -192,7 +198,7 @@ pub fn effects_loop(
         for prop in proposals {
             (ctx.log)(&format!("effects loop, round {round}: trying {}", prop.label));
             let arm = if prop.def.kind == EffectKind::Zone {
-                zone_arm(ctx, &current, &prop.label, &diag_sims, cal, &fold_of, &reference)?
+                zone_arm(ctx, &base_arm, &prop.label, &diag_sims, cal, &fold_of)?
             } else {
                 let mut arm = Arm::default();
                 let values: Vec<Option<f64>> = if prop.def.grid.is_empty() {
@@ -233,7 +239,9 @@ pub fn effects_loop(
                 .map(|(_, s)| arm.cands[s].clone())
                 .unwrap_or_else(|| current.clone());
             let effect_free = if prop.def.kind == EffectKind::Zone {
-                zone_free(ctx, &prop.label)
+                let mut f = free.clone();
+                f.extend(zone_free(ctx, &prop.label));
+                f
             } else {
                 let mut f = free.clone();
                 if let Some(param) = prop.def.param {
@@ -247,7 +255,8 @@ pub fn effects_loop(
             };
             // Promising on the grid: confirm with the refitting cross-validation.
             let screening_cut = if grid_before > 0.0 { 1.0 - grid_after / grid_before } else { 0.0 };
-            let (before, after) = if screening_cut >= cfg.effects.min_improvement && full.effect(&prop.label).is_some() {
+            let (before, after) = if screening_cut >= cfg.effects.min_improvement && full.effect(&prop.label).is_some()
+            {
                 if e0_refit.is_none() {
                     (ctx.log)("  refitting the baseline in each fold");
                     let starts: Vec<Candidate> =
@@ -315,7 +324,7 @@ pub fn effects_loop(
         if let Some(t) = out.trials.iter_mut().rev().find(|t| t.label == trial.label && t.round == round) {
             t.kept = true;
         }
-        // Refit on all calibration runs: base parameters plus the effect's own (a zone alone).
+        // Refit on all calibration runs: base parameters plus the effect's own.
         let spec = chosen.effect(&trial.label).cloned().expect("chosen candidate carries its effect");
         let start = folded(kind, model, &chosen);
         let def = definition(kind, spec.kind).expect("effect defined for the model");
@@ -323,11 +332,7 @@ pub fn effects_loop(
         let (refit, _) =
             fit(ctx, &start, &refit_free, cal, cfg.effects.refit_evaluations, &format!("refit with {}", spec.label));
         current = refit;
-        if spec.kind != EffectKind::Zone {
-            free = refit_free.clone();
-        } else {
-            free.extend(refit_free.iter().cloned());
-        }
+        free = refit_free;
         let parameters: BTreeMap<String, f64> = current
             .params
             .0
@@ -669,12 +674,11 @@ struct Arm {
 /// from the zone are taken from `reference` (exact: same streams, same parameters, never touching the zone).
 fn zone_arm(
     ctx: &Context,
-    current: &Candidate,
+    base_arm: &Arm,
     label: &str,
     diag_sims: &[RunSims],
     cal: &[usize],
     fold_of: &[usize],
-    reference: &[RunSims],
 ) -> crate::Result<Arm> {
     let cfg = ctx.cfg;
     let model = ctx.model;
@@ -685,25 +689,33 @@ fn zone_arm(
         // f == k: all calibration runs.
         let train: Vec<RunSims> =
             (0..cal.len()).filter(|&j| f == k || fold_of[j] != f).map(|j| diag_sims[j].clone()).collect();
-        let zc = zone_check(model, &train, &frame, 0, cfg.seed);
-        let Some(region) = zc.region else {
+        let regions = zone_check(model, &train, &frame, 0, cfg.seed).regions;
+        if regions.is_empty() {
             if f < k {
-                // No zone from this fold's training runs: the arm predicts with the current model.
-                arm.settings.push(reference.to_vec());
-                arm.cands.push(current.clone());
-                arm.fold_settings[f].push(arm.settings.len() - 1);
+                // No zone from this fold's training runs: the arm is the baseline arm.
+                for (sims, c) in base_arm.settings.iter().zip(&base_arm.cands) {
+                    arm.settings.push(sims.clone());
+                    arm.cands.push(c.clone());
+                    arm.fold_settings[f].push(arm.settings.len() - 1);
+                }
             }
             continue;
-        };
-        for &z in &ZONE_MOBILITY_GRID {
-            let c = with_zone(model, current, label, &region, z);
-            let sims = sims_reusing(ctx, &c, cal, reference, &region)?;
-            arm.settings.push(sims);
-            arm.cands.push(c);
-            if f < k {
-                arm.fold_settings[f].push(arm.settings.len() - 1);
-            } else {
-                arm.full.push(arm.settings.len() - 1);
+        }
+        // Each candidate zone, its own mobility × the global one (which moves the rest of the terrain too: the baseline
+        // compromise between the zone and elsewhere must be undone as well).
+        for (region, (reference, base)) in
+            regions.iter().flat_map(|r| base_arm.settings.iter().zip(&base_arm.cands).map(move |b| (r, b)))
+        {
+            for &z in &ZONE_MOBILITY_GRID {
+                let c = with_zone(model, base, label, region, z);
+                let sims = sims_reusing(ctx, &c, cal, reference, region)?;
+                arm.settings.push(sims);
+                arm.cands.push(c);
+                if f < k {
+                    arm.fold_settings[f].push(arm.settings.len() - 1);
+                } else {
+                    arm.full.push(arm.settings.len() - 1);
+                }
             }
         }
     }

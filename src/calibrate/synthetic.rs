@@ -250,8 +250,16 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
         }
     }
     let groups = assign_groups(&mut runs, 10.0);
-    // The truth: the terrain's material, plus the hidden effect.
     let truth_runs = runs.clone();
+    let truth = truth_3d(spec);
+    let truth_model =
+        Model3d::from_parts(truth_runs, groups.clone(), terrain.clone(), bodies.clone(), sim.clone(), None)?;
+    observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m)?;
+    Model3d::from_parts(runs, groups, terrain, bodies, sim, None)
+}
+
+/// The true model of a synthetic 3DRB campaign: the terrain's material, plus the hidden effect.
+pub fn truth_3d(spec: &Synthetic3d) -> Candidate {
     let mut truth = Candidate { params: material_params_3d("default", spec.material), ..Default::default() };
     match &spec.hidden {
         Hidden::None => {}
@@ -295,10 +303,44 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
             });
         }
     }
-    let truth_model =
-        Model3d::from_parts(truth_runs, groups.clone(), terrain.clone(), bodies.clone(), sim.clone(), None)?;
-    observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m)?;
-    Model3d::from_parts(runs, groups, terrain, bodies, sim, None)
+    truth
+}
+
+/// A profile campaign with long run-outs (ours): a 35° slope 40 m long, a 10° apron 30 m long and a flat floor;
+/// releases 0.5, 5 and 15 m above the slope at x = 4, 12 and 20 m. Run-outs of 20 to 50 m, so that an effect moves
+/// them by more than the 0.5 m measurement noise.
+pub fn steep_2d() -> Synthetic2d {
+    Synthetic2d {
+        profile: vec![(40.0, 35.0), (30.0, 10.0), (1000.0, 0.0)],
+        releases: vec![(4.0, 0.5), (12.0, 5.0), (20.0, 15.0)],
+        ..Default::default()
+    }
+}
+
+/// The true model of a synthetic 2DLM campaign: the profile's material, plus the hidden effect.
+pub fn truth_2d(spec: &Synthetic2d) -> Candidate {
+    let mut truth = Candidate { params: material_params_2d("ground", TRUE_2D), effects: Vec::new() };
+    match &spec.hidden {
+        Hidden::None | Hidden::Roughness(_) | Hidden::MassRestitution(_) => {}
+        Hidden::SpeedRestitution(_) => truth.effects.push(EffectSpec {
+            kind: EffectKind::SpeedRestitution,
+            label: "hidden".into(),
+            material: None,
+            region: None,
+        }),
+        Hidden::SoftZone(iv, [rn, rt, f]) => {
+            for (k, v) in material_params_2d("zonetrue", [*rn, 0.02, *rt, 0.02, *f, 3.0]).0 {
+                truth.params.set(k, v);
+            }
+            truth.effects.push(EffectSpec {
+                kind: EffectKind::Zone,
+                label: "zonetrue".into(),
+                material: None,
+                region: Some(Region::Interval([iv[0][0], iv[1][0]])),
+            });
+        }
+    }
+    truth
 }
 
 /// The parameters of a 3DRB material `[cr_mean, cr_sd, static °, dynamic °]` under `name`.
@@ -416,27 +458,7 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
         }
     }
     let groups = assign_groups(&mut runs, 2.0);
-    let mut truth = Candidate { params: material_params_2d("ground", TRUE_2D), effects: Vec::new() };
-    match &spec.hidden {
-        Hidden::None | Hidden::Roughness(_) | Hidden::MassRestitution(_) => {}
-        Hidden::SpeedRestitution(_) => truth.effects.push(EffectSpec {
-            kind: EffectKind::SpeedRestitution,
-            label: "hidden".into(),
-            material: None,
-            region: None,
-        }),
-        Hidden::SoftZone(iv, [rn, rt, f]) => {
-            for (k, v) in material_params_2d("zonetrue", [*rn, 0.02, *rt, 0.02, *f, 3.0]).0 {
-                truth.params.set(k, v);
-            }
-            truth.effects.push(EffectSpec {
-                kind: EffectKind::Zone,
-                label: "zonetrue".into(),
-                material: None,
-                region: Some(Region::Interval([iv[0][0], iv[1][0]])),
-            });
-        }
-    }
+    let truth = truth_2d(spec);
     let truth_model = Model2d::from_parts(runs.clone(), groups.clone(), profile.clone(), options.clone())?;
     observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m)?;
     Model2d::from_parts(runs, groups, profile, options)
