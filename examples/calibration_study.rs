@@ -1,12 +1,12 @@
 //! Synthetic-effect study of `talus calibrate` (issue 5): campaigns made with talus itself with an effect switched
-//! on (speed-dependent restitution, roughness felt relative to rock size, a soft zone), plus controls without one,
-//! calibrated with the effect undeclared. Writes `outputs/calibration_study/summary.json` and `summary.md`, and a
-//! full report per case.
+//! on (speed-dependent restitution, restitution scaling with block mass, a soft zone), plus controls without one,
+//! calibrated with the effect undeclared. Writes `outputs/calibration_study/summary.json` (and one line per case
+//! on stdout), and a full report per case.
 //!
 //! Run: cargo run --release --example calibration_study [-- CASE ...]   (cases: speed size zone control 2d_speed
 //! 2d_zone 2d_control; default: all)
 use std::time::Instant;
-use talus::calibrate::synthetic::{case_3d, synthetic_2d, synthetic_3d, zone_overlap, Hidden, Synthetic2d};
+use talus::calibrate::synthetic::{case_3d, steep_2d, synthetic_2d, synthetic_3d, zone_overlap, Hidden, Synthetic2d};
 use talus::calibrate::{self, params::Region, split, CalibrationConfig, Model};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
@@ -45,16 +45,13 @@ fn main() {
     }
     for (name, hidden) in [
         ("2d_speed", Hidden::SpeedRestitution(9.144)),
-        ("2d_zone", Hidden::SoftZone(vec![[14.0, 0.0], [30.0, 0.0]], [0.1, 0.5, 55.0])),
+        ("2d_zone", Hidden::SoftZone(vec![[2.0, 0.0], [9.0, 0.0]], [0.1, 0.5, 55.0])),
     ] {
         let h = hidden.clone();
         cases.push((
             name.to_string(),
             Box::new(move || {
-                Box::new(
-                    synthetic_2d(&Synthetic2d { hidden: h.clone(), ..Default::default() }, Options2d::default())
-                        .unwrap(),
-                )
+                Box::new(synthetic_2d(&Synthetic2d { hidden: h.clone(), ..steep_2d() }, Options2d::default()).unwrap())
             }),
             hidden,
         ));
@@ -63,7 +60,7 @@ fn main() {
         cases.push((
             format!("2d_control_{s}"),
             Box::new(move || {
-                Box::new(synthetic_2d(&Synthetic2d { seed: s, ..Default::default() }, Options2d::default()).unwrap())
+                Box::new(synthetic_2d(&Synthetic2d { seed: s, ..steep_2d() }, Options2d::default()).unwrap())
             }),
             Hidden::None,
         ));

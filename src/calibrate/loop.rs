@@ -9,8 +9,8 @@
 //!   1.44} ([`super::params::apply_mobility_3d`]);
 //! - an *effect arm*: the effect's parameter on its grid × the same mobility factors (so the effect is not
 //!   credited for a mere re-centring), or × Cr factors {0.5, 0.7, 1, 1.4, 2} for a restitution effect, which
-//!   changes what Cr means; for a zone, the polygon is derived from the training folds only and its
-//!   material's mobility is stepped over {0.2, 0.4, 0.7, 1.5}. A restitution effect is switched on *centred*:
+//!   changes what Cr means; for a zone, the candidate zones are derived from the training folds only and the
+//!   zone material's mobility {0.2, 0.4, 0.7, 1.5} is stepped × the global mobility factors. A restitution effect is switched on *centred*:
 //!   every material's Cr is divided by the effect's factor at the current model's typical impact (median impact
 //!   speed, median impact angle; the mass effect is neutral at the median mass), so that the effect changes how
 //!   restitution varies, not its typical level (ours).
@@ -22,14 +22,14 @@
 //! spread matches the field scatter, which the run-out MAE alone cannot see (ours). An effect whose screening cuts
 //! the mean CRPS by at least `min_improvement` is then confirmed by a
 //! *refitting* cross-validation: in each fold, both arms start from the setting that fold chose and refit their
-//! free parameters (the base parameters, plus the effect's own; a zone's material alone) with the optimiser on the
+//! free parameters (the base parameters, plus the effect's own, a zone's material included) with the optimiser on the
 //! fold's training runs (`cv_refit_evaluations` evaluations), and predict the fold's runs. The decision uses the
 //! refitted errors.
 //!
 //! **"Clearly improves"** (ours): the out-of-fold mean CRPS falls by at least `min_improvement` (5 %) and a
 //! one-sided paired sign-flip permutation test on the per-run CRPS differences gives p ≤ `alpha` (0.05). Among
 //! the effects that pass, the one with the largest cut is kept, then refitted with the optimiser (together with
-//! the base parameters; a zone alone, as it is local), and the loop starts again.
+//! the base parameters), and the loop starts again.
 
 use super::config::ModelKind;
 use super::diagnose::{diagnose, Diagnostic};
@@ -193,7 +193,6 @@ pub fn effects_loop(
         base_arm.fold_settings = vec![(0..base_arm.settings.len()).collect(); cfg.inner_folds];
         let (e0_grid, base_chosen) = cross_validate(ctx, cal, &fold_of, &base_arm.settings, &base_arm.fold_settings);
         let mut e0_refit: Option<Vec<CvError>> = None;
-        let reference = base_arm.settings[MOBILITY_GRID.len() / 2].clone();
         let mut best: Option<(f64, EffectTrial, Candidate, Vec<FreeParam>)> = None;
         for prop in proposals {
             (ctx.log)(&format!("effects loop, round {round}: trying {}", prop.label));
@@ -669,9 +668,10 @@ struct Arm {
     full: Vec<usize>,
 }
 
-/// The zone arm: a polygon per fold from the training runs' deposition excess, and one from all calibration runs
-/// for the refit's start; each stepped over the zone mobility grid. Simulations whose current path stays away
-/// from the zone are taken from `reference` (exact: same streams, same parameters, never touching the zone).
+/// The zone arm: candidate zones per fold from the training runs' deposition excess, and from all calibration runs
+/// for the refit's start; each stepped over the zone mobility grid × the baseline arm's mobility factors.
+/// Simulations whose path under the baseline setting stays away from the zone are taken from it (exact: same
+/// streams, same parameters, never touching the zone).
 fn zone_arm(
     ctx: &Context,
     base_arm: &Arm,
