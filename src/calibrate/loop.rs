@@ -10,7 +10,7 @@
 //! - an *effect arm*: the effect's parameter on its grid × the same mobility factors (so the effect is not
 //!   credited for a mere re-centring), or × Cr factors {0.5, 0.7, 1, 1.4, 2} for a restitution effect, which
 //!   changes what Cr means; for a zone, the candidate zones are derived from the training folds only and the
-//!   zone material's mobility {0.2, 0.4, 0.7, 1.5} is stepped × the global mobility factors. A restitution effect is switched on *centred*:
+//!   zone material's mobility is stepped over {0.2, 0.4, 0.7, 1.5}. A restitution effect is switched on *centred*:
 //!   every material's Cr is divided by the effect's factor at the current model's typical impact (median impact
 //!   speed, median impact angle; the mass effect is neutral at the median mass), so that the effect changes how
 //!   restitution varies, not its typical level (ours).
@@ -669,9 +669,9 @@ struct Arm {
 }
 
 /// The zone arm: candidate zones per fold from the training runs' deposition excess, and from all calibration runs
-/// for the refit's start; each stepped over the zone mobility grid × the baseline arm's mobility factors.
-/// Simulations whose path under the baseline setting stays away from the zone are taken from it (exact: same
-/// streams, same parameters, never touching the zone).
+/// for the refit's start; each stepped over the zone mobility grid. Simulations whose path under the baseline
+/// setting stays away from the zone are taken from it (exact: same streams, same parameters, never touching the
+/// zone).
 fn zone_arm(
     ctx: &Context,
     base_arm: &Arm,
@@ -684,6 +684,8 @@ fn zone_arm(
     let model = ctx.model;
     let frame = model.map_frame();
     let k = cfg.inner_folds;
+    let mid = MOBILITY_GRID.len() / 2;
+    let (reference, base) = (&base_arm.settings[mid], &base_arm.cands[mid]);
     let mut arm = Arm { fold_settings: vec![Vec::new(); k], ..Default::default() };
     for f in 0..=k {
         // f == k: all calibration runs.
@@ -692,20 +694,16 @@ fn zone_arm(
         let regions = zone_check(model, &train, &frame, 0, cfg.seed).regions;
         if regions.is_empty() {
             if f < k {
-                // No zone from this fold's training runs: the arm is the baseline arm.
-                for (sims, c) in base_arm.settings.iter().zip(&base_arm.cands) {
-                    arm.settings.push(sims.clone());
-                    arm.cands.push(c.clone());
-                    arm.fold_settings[f].push(arm.settings.len() - 1);
-                }
+                // No zone from this fold's training runs: the arm predicts with the baseline setting.
+                arm.settings.push(reference.clone());
+                arm.cands.push(base.clone());
+                arm.fold_settings[f].push(arm.settings.len() - 1);
             }
             continue;
         }
-        // Each candidate zone, its own mobility × the global one (which moves the rest of the terrain too: the baseline
-        // compromise between the zone and elsewhere must be undone as well).
-        for (region, (reference, base)) in
-            regions.iter().flat_map(|r| base_arm.settings.iter().zip(&base_arm.cands).map(move |b| (r, b)))
-        {
+        // Each candidate zone over its own mobility grid, from the baseline setting (m = 1); the refitting
+        // cross-validation then refits the rest of the terrain with it.
+        for region in &regions {
             for &z in &ZONE_MOBILITY_GRID {
                 let c = with_zone(model, base, label, region, z);
                 let sims = sims_reusing(ctx, &c, cal, reference, region)?;
