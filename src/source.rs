@@ -219,19 +219,7 @@ impl Sources {
     pub fn release(&self, s: usize, terrain: &Terrain, rock: &RockBody, rng: &mut Rng) -> RigidState {
         let src = &self.sources[s];
         if let Some((p, v, w)) = src.release {
-            // A measured release: the centre of mass where it was, lifted only if the random orientation buries a
-            // vertex.
-            let orientation = random_orientation(rng);
-            let mut state = RigidState {
-                position_m: p,
-                velocity_mps: v,
-                orientation,
-                omega_body_radps: orientation.inverse_transform_vector(&w),
-            };
-            let mut lifted = state;
-            place_above_ground(terrain, rock, &mut lifted, 0.0);
-            state.position_m.z = state.position_m.z.max(lifted.position_m.z);
-            return state;
+            return measured_release(terrain, rock, p, v, w, rng);
         }
         let [x, y] = src.sample_xy(terrain, rng);
         let orientation = random_orientation(rng);
@@ -340,4 +328,27 @@ pub fn place_above_ground(terrain: &Terrain, rock: &RockBody, state: &mut RigidS
         lift = lift.max(ground + gap_m - p.z);
     }
     state.position_m.z = lift;
+}
+
+/// A measured release (position, velocity and spin in the terrain's internal frame): the centre of mass where it
+/// was, in a random orientation, lifted only if that orientation buries a vertex.
+pub fn measured_release(
+    terrain: &Terrain,
+    rock: &RockBody,
+    position_m: Vector3<f64>,
+    velocity_mps: Vector3<f64>,
+    spin_radps: Vector3<f64>,
+    rng: &mut Rng,
+) -> RigidState {
+    let orientation = random_orientation(rng);
+    let mut state = RigidState {
+        position_m,
+        velocity_mps,
+        orientation,
+        omega_body_radps: orientation.inverse_transform_vector(&spin_radps),
+    };
+    let mut lifted = state;
+    place_above_ground(terrain, rock, &mut lifted, 0.0);
+    state.position_m.z = state.position_m.z.max(lifted.position_m.z);
+    state
 }

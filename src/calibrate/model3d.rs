@@ -11,10 +11,10 @@ use crate::campaign::Campaign;
 use crate::error::{Error, Result};
 use crate::random::{stream, TruncNormal};
 use crate::raster::Grid;
-use crate::rock::{random_orientation, RockBody};
+use crate::rock::RockBody;
 use crate::scenario::{MaterialsBy, TerrainSpec};
-use crate::sim::{simulate, Impact, Observer, RigidState, Sample, SimParams, StopReason};
-use crate::source::place_above_ground;
+use crate::sim::{simulate, Impact, Observer, Sample, SimParams, StopReason};
+use crate::source::measured_release;
 use crate::terrain::{horizontal_to_local, Material, Terrain};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
@@ -309,17 +309,7 @@ impl Prepared for Prepared3d<'_> {
         let p = model.local(run.release_m);
         let v = terrain.up.to_internal(run.velocity_mps);
         let w = terrain.up.to_internal(run.spin_radps);
-        // As crate::source::Sources::release for a measured release.
-        let orientation = random_orientation(&mut rng);
-        let mut start = RigidState {
-            position_m: p,
-            velocity_mps: v,
-            orientation,
-            omega_body_radps: orientation.inverse_transform_vector(&w),
-        };
-        let mut lifted = start;
-        place_above_ground(terrain, body, &mut lifted, 0.0);
-        start.position_m.z = start.position_m.z.max(lifted.position_m.z);
+        let start = measured_release(terrain, body, p, v, w, &mut rng);
         let mut obs = PathObserver3d::new(terrain);
         let out = simulate(terrain, body, start, &self.sim, &mut rng, &mut obs);
         let end = out.final_state.position_m;
