@@ -111,8 +111,6 @@ pub struct LoopResult {
     pub trials: Vec<EffectTrial>,
     /// Diagnostics of each round's starting model (round 1: the baseline).
     pub diagnostics: Vec<Vec<Diagnostic>>,
-    /// Zone-check p-values of each round.
-    pub zone_p: Vec<Option<f64>>,
 }
 
 struct Proposal {
@@ -134,13 +132,8 @@ pub fn effects_loop(
     let model = ctx.model;
     let kind = model.kind();
     let mut current = baseline.clone();
-    let mut out = LoopResult {
-        candidate: current.clone(),
-        added: Vec::new(),
-        trials: Vec::new(),
-        diagnostics: Vec::new(),
-        zone_p: Vec::new(),
-    };
+    let mut out =
+        LoopResult { candidate: current.clone(), added: Vec::new(), trials: Vec::new(), diagnostics: Vec::new() };
     let allowed: Vec<&'static EffectDef> = effects_for(kind)
         .iter()
         .filter(|d| cfg.effects.candidates.is_empty() || cfg.effects.candidates.iter().any(|c| c == d.name))
@@ -154,7 +147,6 @@ pub fn effects_loop(
         out.diagnostics.push(diags.clone());
         let zone_allowed = allowed.iter().any(|d| d.kind == EffectKind::Zone);
         let zc = zone_allowed.then(|| zone_check(model, &diag_sims, &frame, 199, cfg.seed.wrapping_add(round as u64)));
-        out.zone_p.push(zc.as_ref().map(|z| z.p_value));
         if let Some(z) = &zc {
             (ctx.log)(&format!(
                 "effects loop, round {round}: zone check p = {:.3} (largest deposition excess {:.3})",

@@ -6,8 +6,9 @@
 //! the repeats, while the other half gives the simulated density, so the replacement is independent of it) and
 //! recompute. If the model were right, the observed statistic would look like these; p = (1 + k)/(1 + B).
 //!
-//! **The zone**: the cells around the extreme excess where the excess keeps at least half its peak value and the
-//! same sign (4-connected), dilated by one cell; on a terrain its convex hull becomes the polygon, on a profile
+//! **The candidate zones** (up to [`MAX_ZONES`]): the cells around the extreme excess where the excess keeps at
+//! least half its peak value and the same sign (4-connected), dilated by one cell; then the same around the
+//! largest excess outside the zones before it. On a terrain a zone's convex hull becomes the polygon, on a profile
 //! its x extent the interval. A positive peak is a slow zone (real rocks stop there, simulated ones run on); a
 //! negative one a fast zone.
 
@@ -24,8 +25,6 @@ pub struct ZoneCheck {
     pub statistic: f64,
     /// Monte Carlo p-value.
     pub p_value: f64,
-    /// +1 for a slow zone (excess of observed rests), −1 for a fast one.
-    pub sign: f64,
     /// Candidate zones: around the extreme, then around the largest |excess| outside the zones before it (at
     /// most [`MAX_ZONES`]).
     pub regions: Vec<Region>,
@@ -48,7 +47,7 @@ pub fn zone_check(model: &dyn Model, sims: &[RunSims], frame: &MapFrame, bootstr
     let half = if repeats >= 4 { repeats / 2 } else { 0 };
     let density_range = 0..if half > 0 { half } else { repeats };
     let field = deposition_excess(model, sims, &g, frame.profile, density_range.clone());
-    let (arg, statistic) = extreme(&field);
+    let statistic = extreme(&field).1;
     // Null: pseudo-observations from the other half (or all repeats when there are too few).
     let pool = if half > 0 { half..repeats } else { 0..repeats };
     let mut rng = stream(seed, ZONE_STREAM);
@@ -68,12 +67,11 @@ pub fn zone_check(model: &dyn Model, sims: &[RunSims], frame: &MapFrame, bootstr
     }
     let p_value = (1 + hits) as f64 / (1 + bootstrap) as f64;
     let full = deposition_excess(model, sims, &g, frame.profile, 0..repeats);
-    let sign = if field.get(arg).copied().unwrap_or(0.0) >= 0.0 { 1.0 } else { -1.0 };
     let regions = candidate_regions(&g, &field, frame.profile);
     for (v, f) in g.values.iter_mut().zip(&full) {
         *v = *f as f32;
     }
-    ZoneCheck { statistic, p_value, sign, regions, excess: g }
+    ZoneCheck { statistic, p_value, regions, excess: g }
 }
 
 /// Up to [`MAX_ZONES`] zones: each around the largest |field| outside the zones found before it.
