@@ -191,21 +191,26 @@ fn level_lines(terrain: &Terrain, grid: &HeightGrid, level: f64, max_slope_deg: 
             out.push(refined);
             continue;
         };
-        let ok = |p: &[f64; 2]| {
+        out.extend(pieces_where(refined, |p| {
             terrain.surface.at(p[0], p[1]).is_some_and(|s| s.normal.z.clamp(-1.0, 1.0).acos().to_degrees() <= max)
-        };
-        let mut piece: Vec<[f64; 2]> = Vec::new();
-        for p in &refined {
-            if ok(p) {
-                piece.push(*p);
-            } else if !piece.is_empty() {
-                out.push(std::mem::take(&mut piece));
-            }
-        }
-        if !piece.is_empty() {
-            out.push(piece);
+        }));
+    }
+    out.retain(|l| l.len() >= 2);
+    out
+}
+
+/// The runs of at least two consecutive vertices of `line` where `keep` holds.
+fn pieces_where(line: Vec<[f64; 2]>, keep: impl Fn(&[f64; 2]) -> bool) -> Vec<Vec<[f64; 2]>> {
+    let mut out = Vec::new();
+    let mut piece: Vec<[f64; 2]> = Vec::new();
+    for p in line {
+        if keep(&p) {
+            piece.push(p);
+        } else if !piece.is_empty() {
+            out.push(std::mem::take(&mut piece));
         }
     }
+    out.push(piece);
     out.retain(|l| l.len() >= 2);
     out
 }
@@ -300,20 +305,7 @@ fn offset_line(terrain: &Terrain, line: &[[f64; 2]], d: f64, side: Side) -> Vec<
         };
         pts.push([p[0] + sign * d * nrm[0], p[1] + sign * d * nrm[1]]);
     }
-    let mut out = Vec::new();
-    let mut piece: Vec<[f64; 2]> = Vec::new();
-    for p in pts {
-        if terrain.surface.at(p[0], p[1]).is_some() {
-            piece.push(p);
-        } else if !piece.is_empty() {
-            out.push(std::mem::take(&mut piece));
-        }
-    }
-    if !piece.is_empty() {
-        out.push(piece);
-    }
-    out.retain(|l| l.len() >= 2);
-    out
+    pieces_where(pts, |p| terrain.surface.at(p[0], p[1]).is_some())
 }
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ use super::classes::thousands;
 use super::design::{Assessment, Status};
 use super::BarrierStudy;
 use crate::error::{Error, Result};
+use crate::io::csv_text::{field, number};
 use crate::io::geojson::{self, Feature, Geometry};
 use crate::render::colormap::CATEGORICAL;
 use crate::render::{Colormap, OverlayLine, Overlays, ValueScale};
@@ -31,22 +32,6 @@ pub fn kind_name(k: &CandidateKind) -> &'static str {
     }
 }
 
-fn f(v: f64, decimals: usize) -> String {
-    if v.is_finite() {
-        format!("{v:.decimals$}")
-    } else {
-        String::new()
-    }
-}
-
-fn csv_text(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
 const CSV_HEAD: &str = "rank,name,kind,candidate_length_m,rocks_reaching,status,from_m,to_m,length_m,intercepted,share,share_of_released,meets_target,rocks_crossing,passing_height_p95_m,passing_height_max_m,rock_size_p95_m,design_height_m,fence_height_m,energy_p95_kj,energy_p99_kj,energy_max_kj,speed_p95_mps,crossing_angle_p50_deg,class_kj,cost,x_from,y_from,x_to,y_to,note";
 
 fn csv_row(a: &Assessment, terrain: &Terrain) -> String {
@@ -64,7 +49,7 @@ fn csv_row(a: &Assessment, terrain: &Terrain) -> String {
     format!(
         "{},{},{},{:.2},{},{status},{:.2},{:.2},{:.2},{},{:.4},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{ends},{}",
         a.rank.map_or(String::new(), |r| r.to_string()),
-        csv_text(&a.name),
+        field(&a.name),
         kind_name(&a.kind),
         a.candidate_length_m,
         a.rocks_reaching,
@@ -76,19 +61,19 @@ fn csv_row(a: &Assessment, terrain: &Terrain) -> String {
         a.share_of_released,
         a.meets_target,
         a.rocks_crossing,
-        f(a.passing_height_p95_m, 3),
-        f(a.passing_height_max_m, 3),
-        f(a.rock_size_p95_m, 3),
-        f(a.design_height_m, 3),
-        f(a.fence_height_m, 1),
-        f(a.energy_p95_kj, 1),
-        f(a.energy_p99_kj, 1),
-        f(a.energy_max_kj, 1),
-        f(a.speed_p95_mps, 2),
-        f(a.crossing_angle_p50_deg, 1),
+        number(a.passing_height_p95_m, 3),
+        number(a.passing_height_max_m, 3),
+        number(a.rock_size_p95_m, 3),
+        number(a.design_height_m, 3),
+        number(a.fence_height_m, 1),
+        number(a.energy_p95_kj, 1),
+        number(a.energy_p99_kj, 1),
+        number(a.energy_max_kj, 1),
+        number(a.speed_p95_mps, 2),
+        number(a.crossing_angle_p50_deg, 1),
         a.class_kj.map_or(String::new(), |c| format!("{c}")),
         a.cost.map_or(String::new(), |c| format!("{c:.1}")),
-        csv_text(&a.note)
+        field(&a.note)
     )
 }
 

@@ -261,35 +261,21 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
 /// The true model of a synthetic 3DRB campaign: the terrain's material, plus the hidden effect.
 pub fn truth_3d(spec: &Synthetic3d) -> Candidate {
     let mut truth = Candidate { params: material_params_3d("default", spec.material), ..Default::default() };
+    let hidden = |kind| EffectSpec { kind, label: "hidden".into(), material: None, region: None };
     match &spec.hidden {
         Hidden::None => {}
         Hidden::SpeedRestitution(k) => {
             truth.params.set("hidden.k_mps", *k);
-            truth.effects.push(EffectSpec {
-                kind: EffectKind::SpeedRestitution,
-                label: "hidden".into(),
-                material: None,
-                region: None,
-            });
+            truth.effects.push(hidden(EffectKind::SpeedRestitution));
         }
         Hidden::Roughness(r) => {
             truth.params.set("hidden.rough_m", *r);
-            truth.effects.push(EffectSpec {
-                kind: EffectKind::Roughness,
-                label: "hidden".into(),
-                material: None,
-                region: None,
-            });
+            truth.effects.push(hidden(EffectKind::Roughness));
         }
         Hidden::MassRestitution(b) => {
             truth.params.set("hidden.exponent", *b);
             truth.params.set("hidden.reference_kg", 150.0);
-            truth.effects.push(EffectSpec {
-                kind: EffectKind::MassRestitution,
-                label: "hidden".into(),
-                material: None,
-                region: None,
-            });
+            truth.effects.push(hidden(EffectKind::MassRestitution));
         }
         Hidden::SoftZone(poly, [cr, s, d]) => {
             for (k, v) in material_params_3d("zonetrue", [*cr, 0.02, *s, *d]).0 {

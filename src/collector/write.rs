@@ -9,6 +9,7 @@
 use super::stats::{CollectorStats, Quantity, QuantityDists, PERCENTILES};
 use super::Collector;
 use crate::error::{Error, Result};
+use crate::io::csv_text::{field, number};
 use crate::io::geojson::{self, Feature, Geometry};
 use crate::raster::Crs;
 use crate::terrain::frame::{ground_xyz, map_xy};
@@ -82,22 +83,6 @@ fn rows<'a>(collectors: &'a [Collector], stats: &'a CollectorStats) -> Vec<Row<'
     out
 }
 
-fn fmt(v: f64) -> String {
-    if v.is_finite() {
-        format!("{v:.4}")
-    } else {
-        String::new()
-    }
-}
-
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
 /// Writes `collectors.csv` and `collectors.geojson` into `dir`; `n_rocks` is the number released.
 pub fn write_collectors(
     dir: &Path,
@@ -127,11 +112,11 @@ pub fn write_collectors(
         for r in &rows {
             let (f, t) = (map_xy(terrain, r.from), map_xy(terrain, r.to));
             let stretch = r.stretch.map_or("all".to_string(), |k| k.to_string());
-            let stats: Vec<String> = stat_values(r.dists).into_iter().map(fmt).collect();
+            let stats: Vec<String> = stat_values(r.dists).into_iter().map(|v| number(v, 4)).collect();
             writeln!(
                 w,
                 "{},{stretch},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{},{:.6},{}",
-                csv_field(r.collector),
+                field(r.collector),
                 r.span.0,
                 r.span.1,
                 f[0],

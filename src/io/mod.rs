@@ -2,6 +2,7 @@
 
 pub mod ascii_grid;
 pub mod atomic;
+pub mod csv_text;
 pub mod geojson;
 pub mod geotiff;
 mod grid_check;
