@@ -121,7 +121,13 @@ impl Setup {
 
     /// Runs rock `index` with `observer`.
     pub fn run_rock(&self, index: usize, observer: &mut impl Observer) -> RockRecord {
-        let (draw, mut rng) = self.draw(index);
+        let (draw, rng) = self.draw(index);
+        self.run_drawn(draw, rng, observer)
+    }
+
+    /// Runs a rock already drawn with [`Setup::draw`] (with the stream it returned) with `observer`.
+    pub fn run_drawn(&self, draw: RockDraw, mut rng: Rng, observer: &mut impl Observer) -> RockRecord {
+        let index = draw.index;
         let outcome = simulate(&self.terrain, &draw.body, draw.start, &self.params, &mut rng, observer);
         let d = outcome.final_state.position_m - draw.start.position_m;
         RockRecord {

@@ -295,14 +295,14 @@ pub fn run_scenario_with(
         threads,
         128,
         |i| {
-            // The rock's size is needed only at collector crossings.
-            let size_m =
-                if collectors.collectors.is_empty() { 0.0 } else { 2.0 * setup.draw(i).0.body.equivalent_radius_m() };
+            let (draw, rng) = setup.draw(i);
+            // The rock's size, reported at collector crossings.
+            let size_m = 2.0 * draw.body.equivalent_radius_m();
             let mut track = (
                 CellTrack::new(&frame),
                 ((i < n_paths).then(PathRecorder::default), crate::collector::CollectorTrack::new(&collectors, size_m)),
             );
-            let rec = setup.run_rock(i, &mut track);
+            let rec = setup.run_drawn(draw, rng, &mut track);
             (rec, track.0.into_visits(), track.1 .0.map(|p| p.0), track.1 .1.into_crossings())
         },
         |i, (rec, visits, path, crossings): (RockRecord, _, Option<Vec<Sample>>, crate::collector::RockCrossings)| {
