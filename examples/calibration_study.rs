@@ -3,10 +3,11 @@
 //! calibrated with the effect undeclared. Writes `outputs/calibration_study/summary.json` (and one line per case
 //! on stdout), and a full report per case.
 //!
-//! Run: cargo run --release --example calibration_study [-- CASE ...]   (cases: speed size zone control 2d_speed
-//! 2d_zone 2d_control; default: all)
+//! Run: cargo run --release --example calibration_study [-- CASE ...]   (cases: speed size zone control_a_N
+//! control_b_N 2d_speed 2d_size 2d_zone 2d_control_a_N 2d_control_b_N, N = 1..3, a trailing * matches a prefix;
+//! default: all)
 use std::time::Instant;
-use talus::calibrate::synthetic::{case_3d, steep_2d, synthetic_2d, synthetic_3d, zone_overlap, Hidden, Synthetic2d};
+use talus::calibrate::synthetic::{case_2d, case_3d, synthetic_2d, synthetic_3d, zone_overlap, Hidden};
 use talus::calibrate::{self, params::Region, split, CalibrationConfig, Model};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
@@ -43,27 +44,14 @@ fn main() {
             ));
         }
     }
-    for (name, hidden) in [
-        ("2d_speed", Hidden::SpeedRestitution(9.144)),
-        ("2d_zone", Hidden::SoftZone(vec![[2.0, 0.0], [9.0, 0.0]], [0.1, 0.5, 55.0])),
-    ] {
-        let h = hidden.clone();
-        cases.push((
-            name.to_string(),
-            Box::new(move || {
-                Box::new(synthetic_2d(&Synthetic2d { hidden: h.clone(), ..steep_2d() }, Options2d::default()).unwrap())
-            }),
-            hidden,
-        ));
-    }
-    for s in seeds {
-        cases.push((
-            format!("2d_control_{s}"),
-            Box::new(move || {
-                Box::new(synthetic_2d(&Synthetic2d { seed: s, ..steep_2d() }, Options2d::default()).unwrap())
-            }),
-            Hidden::None,
-        ));
+    for base in ["speed", "size", "zone", "control_a", "control_b"] {
+        let seeds: &[u64] = if base.starts_with("control") { &seeds } else { &[1] };
+        for &s in seeds {
+            let spec = case_2d(base, s).unwrap();
+            let hidden = spec.hidden.clone();
+            let name = if hidden == Hidden::None { format!("2d_{base}_{s}") } else { format!("2d_{base}") };
+            cases.push((name, Box::new(move || Box::new(synthetic_2d(&spec, Options2d::default()).unwrap())), hidden));
+        }
     }
     for (name, make, hidden) in cases {
         if !want(&name) {

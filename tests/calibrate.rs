@@ -3,7 +3,7 @@
 
 use talus::calibrate::config::{CalibrationConfig, ModelKind, ParamSetting};
 use talus::calibrate::params::Region;
-use talus::calibrate::synthetic::{steep_2d, synthetic_2d, synthetic_3d, Hidden, Synthetic2d, Synthetic3d, TRUE_2D};
+use talus::calibrate::synthetic::{case_2d, synthetic_2d, synthetic_3d, Synthetic2d, Synthetic3d, TRUE_2D};
 use talus::calibrate::{calibrate, split, Model};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
@@ -47,26 +47,18 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
     assert!(c.report.effects_added.is_empty(), "{:?}", c.report.effects_added);
 }
 
-#[test]
-fn profile_loop_runs_and_adds_nothing_without_a_hidden_effect() {
-    let cfg = config_2d();
-    for seed in [1, 2, 3] {
-        let model = synthetic_2d(&Synthetic2d { seed, ..steep_2d() }, Options2d::default()).unwrap();
-        let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
-        let c = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap();
-        assert!(c.report.effects_added.is_empty(), "seed {seed}: {:#?}", c.report.effects_tried);
-        assert!(c.report.final_stage.holdout.runout_mae_m.is_finite());
-    }
-}
-
-/// Tiny settings for the 3DRB tests (the engine runs in a debug build here).
 fn tiny_3d() -> CalibrationConfig {
-    let mut cfg =
-        CalibrationConfig { repeats: 6, search_repeats: 2, max_evaluations: 12, inner_folds: 3, ..Default::default() };
+    let mut cfg = CalibrationConfig {
+        repeats: 6,
+        search_repeats: 2,
+        max_evaluations: Some(12),
+        inner_folds: 3,
+        ..Default::default()
+    };
     cfg.effects.max_rounds = 1;
     cfg.effects.max_proposals = 2;
-    cfg.effects.refit_evaluations = 6;
-    cfg.effects.cv_refit_evaluations = 6;
+    cfg.effects.refit_evaluations = Some(6);
+    cfg.effects.cv_refit_evaluations = Some(6);
     cfg.effects.permutations = 199;
     cfg.back_analysis.grid_points = 3;
     cfg
@@ -118,27 +110,61 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
     assert_eq!(json["holdout_ids"].as_array().unwrap().len(), hold.len());
 }
 
-/// Calibrates a synthetic profile campaign with `hidden` switched on (and undeclared); returns the report and the
-/// held-out run-out MAE before and after the loop.
-fn profile_case(hidden: Hidden) -> talus::calibrate::report::Report {
-    let cfg = config_2d();
-    let model = synthetic_2d(&Synthetic2d { seed: 2, hidden, ..steep_2d() }, Options2d::default()).unwrap();
+/// Calibrates the synthetic profile case `name` ([`case_2d`]: its effect switched on but undeclared) with the
+/// default settings.
+fn profile_case(name: &str, seed: u64) -> talus::calibrate::report::Report {
+    let cfg = CalibrationConfig::default();
+    let model = synthetic_2d(&case_2d(name, seed).unwrap(), Options2d::default()).unwrap();
     let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
-    let c = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap();
-    c.report
+    calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report
+}
+
+/// The loop's first added effect, which must be `name`, and the held-out run-out MAE cut it brings (at least 30 %).
+fn named_with_cut<'a>(
+    r: &'a talus::calibrate::report::Report,
+    name: &str,
+) -> &'a talus::calibrate::effects_loop::AddedEffect {
+    let Some(e) = r.effects_added.first().filter(|e| e.name == name) else {
+        panic!("{name} not found: added {:?}; tried {:#?}", r.effects_added, r.effects_tried)
+    };
+    let (before, after) = (r.baseline.holdout.runout_mae_m, r.final_stage.holdout.runout_mae_m);
+    assert!(after < 0.7 * before, "held-out MAE {before:.2} -> {after:.2} m: cut under 30 %");
+    e
 }
 
 #[test]
 fn profile_loop_finds_a_hidden_soft_zone() {
     // A soft patch (Rn 0.1, Rt 0.5, friction 55°) around the uppermost release point stops its rocks; undeclared.
-    let r = profile_case(Hidden::SoftZone(vec![[2.0, 0.0], [9.0, 0.0]], [0.1, 0.5, 55.0]));
-    let zone = r.effects_added.first().filter(|e| e.name == "zone");
-    let Some(Region::Interval([a, b])) = zone.and_then(|e| e.region.clone()) else {
-        panic!("no zone found: {:#?}", r.effects_tried)
-    };
+    let r = profile_case("zone", 2);
+    let Some(Region::Interval([a, b])) = named_with_cut(&r, "zone").region.clone() else { panic!("no interval") };
     assert!(a < 9.0 && b > 2.0 && b - a < 20.0, "zone [{a}, {b}] misses the hidden one at [2, 9]");
-    let (before, after) = (r.baseline.holdout.runout_mae_m, r.final_stage.holdout.runout_mae_m);
-    assert!(after < 0.7 * before, "held-out MAE {before:.2} -> {after:.2} m: cut under 30 %");
+}
+
+#[test]
+fn profile_loop_finds_hidden_speed_dependent_restitution() {
+    // Rn falls with impact speed (Pfeiffer & Bowen with K = 10 m/s) on a bouncy slope with drops of 0.5 to 40 m.
+    let r = profile_case("speed", 1);
+    let k = named_with_cut(&r, "speed_restitution").parameters["speed_restitution.k_mps"];
+    assert!((5.0..20.0).contains(&k), "K {k} m/s, hidden 10");
+}
+
+#[test]
+fn profile_loop_finds_hidden_mass_dependent_restitution() {
+    // Rn grows with mass as (m/500 kg)^0.3: 50 kg rocks bounce half as high as 5000 kg ones.
+    let r = profile_case("size", 1);
+    let beta = named_with_cut(&r, "mass_restitution").parameters["mass_restitution.exponent"];
+    assert!((-0.5..-0.15).contains(&beta), "exponent {beta}, hidden -0.3");
+}
+
+#[test]
+fn profile_loop_adds_nothing_without_a_hidden_effect() {
+    for (design, seed) in
+        [("control_a", 1), ("control_a", 2), ("control_a", 3), ("control_b", 1), ("control_b", 2), ("control_b", 3)]
+    {
+        let r = profile_case(design, seed);
+        assert!(r.effects_added.is_empty(), "{design} seed {seed}: {:#?}", r.effects_tried);
+        assert!(r.final_stage.holdout.runout_mae_m.is_finite());
+    }
 }
 
 /// Writes a synthetic profile campaign (no `y_m` column) and its `profile.csv` into `dir`.

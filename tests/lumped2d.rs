@@ -93,6 +93,31 @@ fn pfeiffer_bowen_halves_rn_at_9_144_mps() {
     }
 }
 
+#[test]
+fn rn_scales_with_a_chosen_k_and_with_mass() {
+    // A drop at 4 m/s with K = 4 m/s halves Rn; the mass rule multiplies it by (m/m_ref)^-beta; both together
+    // multiply. The first rebound speed is Rn_eff × 4 m/s (a bounce of height Rn_eff² × the drop).
+    let slope = one_material(&[[0.0, 0.0], [20.0, 0.0]], fixed(0.5, 1.0, 30.0));
+    let h = 16.0 / (2.0 * G_MPS2);
+    let cases =
+        [(true, 0.0, 100.0, 0.25), (false, -0.5, 400.0, 1.0), (false, 0.5, 400.0, 0.25), (true, 0.5, 400.0, 0.125)];
+    for (scale, beta, mass_kg, rn) in cases {
+        let opt = Options2d {
+            scale_rn_by_velocity: scale,
+            rn_velocity_scale_mps: 4.0,
+            rn_mass_exponent: beta,
+            rn_reference_mass_kg: 100.0,
+            ..Default::default()
+        };
+        let mut rec = PathRecorder::default();
+        let s = RockStart2d { mass_kg, ..start(10.0, h, 0.0, 0.0) };
+        simulate_rock(&slope, &s, &opt, &mut stream(1, 0), &mut rec);
+        let PathPiece::Impact(i) = rec.pieces[1] else { panic!("{:?}", rec.pieces[1]) };
+        assert_relative_eq!(i.rn, rn, max_relative = 1e-12);
+        assert_relative_eq!(i.velocity_out_mps[1], rn * 4.0, max_relative = 1e-12);
+    }
+}
+
 /// The lowest ground at `x`: at the x of a vertical step the whole step is ground, so a point on it is not below
 /// the profile.
 fn ground_low(profile: &Profile, x: f64) -> f64 {

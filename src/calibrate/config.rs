@@ -194,11 +194,12 @@ pub struct EffectsConfig {
     pub max_rounds: usize,
     /// Permutations of the tests (default 999).
     pub permutations: usize,
-    /// Largest optimiser evaluations when refitting after an effect is kept (default 30).
-    pub refit_evaluations: usize,
+    /// Largest optimiser evaluations when refitting after an effect is kept (default 30 for 3DRB, 150 for
+    /// 2DLM).
+    pub refit_evaluations: Option<usize>,
     /// Largest optimiser evaluations of each fold's refit in the cross-validation that confirms a promising
-    /// effect (default 20; the refit starts from the fold's best grid setting).
-    pub cv_refit_evaluations: usize,
+    /// effect (default 20 for 3DRB, 100 for 2DLM; the refit starts from the fold's best grid setting).
+    pub cv_refit_evaluations: Option<usize>,
 }
 
 impl Default for EffectsConfig {
@@ -211,8 +212,8 @@ impl Default for EffectsConfig {
             max_proposals: 4,
             max_rounds: 3,
             permutations: 999,
-            refit_evaluations: 30,
-            cv_refit_evaluations: 20,
+            refit_evaluations: None,
+            cv_refit_evaluations: None,
         }
     }
 }
@@ -254,8 +255,8 @@ pub struct CalibrationConfig {
     pub group_link_m: f64,
     /// What the population fit minimises (default `crps`).
     pub objective: Objective,
-    /// Most objective evaluations of the population fit (default 60).
-    pub max_evaluations: usize,
+    /// Most objective evaluations of the population fit (default 60 for 3DRB, 300 for 2DLM).
+    pub max_evaluations: Option<usize>,
     /// Threads (default 0: all cores). Results do not depend on it.
     pub threads: usize,
     /// Per material: parameter → fixed value or free range (defaults per model, see [`ModelKind`]).
@@ -283,7 +284,7 @@ impl Default for CalibrationConfig {
             outer_folds: 5,
             group_link_m: 20.0,
             objective: Objective::default(),
-            max_evaluations: 60,
+            max_evaluations: None,
             threads: 0,
             materials: BTreeMap::new(),
             terrain: TerrainMap::default(),
@@ -295,7 +296,42 @@ impl Default for CalibrationConfig {
     }
 }
 
+/// Optimiser budgets when the settings leave them out, as (population fit, refit after an effect, each fold's
+/// refit) objective evaluations (ours): a 3DRB evaluation simulates every calibration run `search_repeats` times,
+/// seconds each on a real terrain, so its budgets are tight; a 2DLM evaluation costs milliseconds, so the optimiser
+/// may run until it converges.
+fn default_evaluations(model: ModelKind) -> (usize, usize, usize) {
+    match model {
+        ModelKind::Rigid3d => (60, 30, 20),
+        ModelKind::Lumped2d => (300, 150, 100),
+    }
+}
+
 impl CalibrationConfig {
+    /// Most objective evaluations of the population fit for `model`.
+    pub fn max_evaluations(&self, model: ModelKind) -> usize {
+        self.max_evaluations.unwrap_or(default_evaluations(model).0)
+    }
+
+    /// Most objective evaluations of the refit after an effect is kept, for `model`.
+    pub fn refit_evaluations(&self, model: ModelKind) -> usize {
+        self.effects.refit_evaluations.unwrap_or(default_evaluations(model).1)
+    }
+
+    /// Most objective evaluations of each fold's refit in the confirming cross-validation, for `model`.
+    pub fn cv_refit_evaluations(&self, model: ModelKind) -> usize {
+        self.effects.cv_refit_evaluations.unwrap_or(default_evaluations(model).2)
+    }
+
+    /// These settings with the budgets left out filled in for `model` (as the report records them).
+    pub fn resolved(&self, model: ModelKind) -> CalibrationConfig {
+        let mut c = self.clone();
+        c.max_evaluations = Some(self.max_evaluations(model));
+        c.effects.refit_evaluations = Some(self.refit_evaluations(model));
+        c.effects.cv_refit_evaluations = Some(self.cv_refit_evaluations(model));
+        c
+    }
+
     /// Reads a settings file.
     pub fn read(path: &Path) -> Result<CalibrationConfig> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
@@ -350,7 +386,7 @@ impl CalibrationConfig {
         if !(self.group_link_m.is_finite() && self.group_link_m >= 0.0) {
             return Err(Error::invalid(f("group_link_m"), "must be a non-negative distance", "use for example 20"));
         }
-        if self.max_evaluations < 5 {
+        if self.max_evaluations.is_some_and(|n| n < 5) {
             return Err(Error::invalid(f("max_evaluations"), "must be at least 5", "use for example 60"));
         }
         self.simulation.validate(&format!("{source}: simulation."))?;

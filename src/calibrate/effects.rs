@@ -137,20 +137,13 @@ const ZONE: EffectDef = EffectDef {
 };
 
 const SPEED_2D: EffectDef = EffectDef {
-    kind: EffectKind::SpeedRestitution,
-    name: "speed_restitution",
-    param: None,
-    grid: &[],
-    bounds: (0.0, 0.0),
-    signature: &[
-        "release_height_m",
-        "drop_height_m",
-        "impact_speed_mean_mps",
-        "impact_speed_max_mps",
-        "initial_speed_mps",
-    ],
-    formula:
-        "Rn' = Rn / (1 + (v_n/9.144 m/s)^2) (Pfeiffer & Bowen 1989, RocFall's 'scale Rn by velocity', physics.md §3)",
+    formula: "Rn' = Rn / (1 + (v_n/K)^2), v_n the normal impact speed (Pfeiffer & Bowen 1989, RocFall's 'scale Rn by velocity' with their K = 9.144 m/s, physics.md §3)",
+    ..SPEED_3D
+};
+
+const MASS_2D: EffectDef = EffectDef {
+    formula: "Rn' = min(1, Rn (m/m_ref)^-beta), m_ref the campaign's median block mass (physics.md §8, f_m; RocFall's 'scale Rn by mass')",
+    ..MASS_3D
 };
 
 const CRSP_2D: EffectDef = EffectDef {
@@ -167,7 +160,7 @@ const CRSP_2D: EffectDef = EffectDef {
 /// The effects a model supports, in the order the loop considers them.
 pub fn effects_for(model: ModelKind) -> &'static [EffectDef] {
     const D3: [EffectDef; 7] = [SPEED_3D, ANGLE_3D, MASS_3D, ROUGH_3D, ROLL_3D, DRAG_3D, ZONE];
-    const D2: [EffectDef; 3] = [SPEED_2D, CRSP_2D, ZONE];
+    const D2: [EffectDef; 4] = [SPEED_2D, MASS_2D, CRSP_2D, ZONE];
     match model {
         ModelKind::Rigid3d => &D3,
         ModelKind::Lumped2d => &D2,

@@ -197,7 +197,7 @@ pub fn effects_loop(
                 } else {
                     prop.def.grid.iter().map(|v| Some(*v)).collect()
                 };
-                let restitution = is_restitution(prop.def.kind) && kind == ModelKind::Rigid3d;
+                let restitution = is_restitution(prop.def.kind);
                 let axis: &[f64] = if restitution { &CR_SCALE_GRID } else { &MOBILITY_GRID };
                 for v in values {
                     for &m in axis {
@@ -321,7 +321,7 @@ pub fn effects_loop(
         let def = definition(kind, spec.kind).expect("effect defined for the model");
         (ctx.log)(&format!("effects loop, round {round}: keeping {}, refitting", spec.label));
         let (refit, _) =
-            fit(ctx, &start, &refit_free, cal, cfg.effects.refit_evaluations, &format!("refit with {}", spec.label));
+            fit(ctx, &start, &refit_free, cal, cfg.refit_evaluations(kind), &format!("refit with {}", spec.label));
         current = refit;
         free = refit_free;
         let parameters: BTreeMap<String, f64> = current
@@ -358,9 +358,10 @@ pub fn effects_loop(
     Ok(out)
 }
 
-/// Multiplies every material's (and zone's) mean Cr by `f`, capped at 1.
+/// Multiplies every material's (and zone's) mean restitution (Cr in 3DRB, Rn in 2DLM) by `f`, capped at 1.
 fn scale_cr(c: &mut Candidate, f: f64) {
-    let names: Vec<String> = c.params.0.keys().filter(|k| k.ends_with(".cr_mean")).cloned().collect();
+    let names: Vec<String> =
+        c.params.0.keys().filter(|k| k.ends_with(".cr_mean") || k.ends_with(".rn_mean")).cloned().collect();
     for n in names {
         let v = c.params.get_or(&n, 0.0);
         c.params.set(n, (v * f).min(1.0));
@@ -407,7 +408,15 @@ fn refit_cv(
         let c = if used.is_empty() {
             start.clone()
         } else {
-            fit(ctx, start, &used, &train, ctx.cfg.effects.cv_refit_evaluations, &format!("{what}, fold {}", f + 1)).0
+            fit(
+                ctx,
+                start,
+                &used,
+                &train,
+                ctx.cfg.cv_refit_evaluations(ctx.model.kind()),
+                &format!("{what}, fold {}", f + 1),
+            )
+            .0
         };
         let test: Vec<usize> = test_pos.iter().map(|&j| cal[j]).collect();
         // The fold's runs are predicted with the reported repeats: a steadier median for the paired test.
@@ -568,10 +577,9 @@ pub fn with_effect(
     if let (Some(param), Some(v)) = (def.param, value) {
         c.params.set(format!("{label}.{param}"), v);
     }
-    // The effect's factor at the typical impact; Cr is divided by it (3DRB only: the 2DLM speed rule has no
-    // parameter and RocFall applies it as is).
+    // The effect's factor at the typical impact; the restitution (Cr, or Rn in 2DLM) is divided by it.
     let factor = match (model.kind(), def.kind, value) {
-        (ModelKind::Rigid3d, EffectKind::SpeedRestitution, Some(k)) if centre.impact_speed_mps.is_finite() => {
+        (_, EffectKind::SpeedRestitution, Some(k)) if centre.impact_speed_mps.is_finite() => {
             1.0 / (1.0 + (centre.impact_speed_mps / k).powi(2))
         }
         (ModelKind::Rigid3d, EffectKind::AngleRestitution, Some(a)) if centre.impact_angle_deg.is_finite() => {
@@ -580,11 +588,7 @@ pub fn with_effect(
         _ => 1.0,
     };
     if factor > 0.0 && factor != 1.0 {
-        let names: Vec<String> = c.params.0.keys().filter(|k| k.ends_with(".cr_mean")).cloned().collect();
-        for n in names {
-            let v = c.params.get_or(&n, 0.0);
-            c.params.set(n, (v / factor).min(1.0));
-        }
+        scale_cr(&mut c, 1.0 / factor);
     }
     if def.kind == EffectKind::MassRestitution {
         let mut masses: Vec<f64> = model.runs().iter().map(|r| r.mass_kg).collect();

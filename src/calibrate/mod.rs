@@ -119,7 +119,7 @@ pub fn calibrate(
     let runs = model.runs();
     let (start, free) = base_candidate(model, cfg);
     log(&format!("population fit of {} free parameters on {} runs", free.len(), cal.len()));
-    let (baseline, search) = fit::fit(&ctx, &start, &free, cal, cfg.max_evaluations, "population fit");
+    let (baseline, search) = fit::fit(&ctx, &start, &free, cal, cfg.max_evaluations(model.kind()), "population fit");
     let t_fit = t0.elapsed().as_secs_f64();
     let back =
         if cfg.back_analysis.enabled { backanalysis::back_analyse(&ctx, &baseline, &free, cal) } else { Vec::new() };
@@ -200,7 +200,7 @@ pub fn calibrate(
             simulations: 0,
             threads,
         },
-        settings: cfg.clone(),
+        settings: cfg.resolved(model.kind()),
     };
     report.timing.total_s = t0.elapsed().as_secs_f64();
     report.timing.final_evaluation_s = report.timing.total_s - t_loop;

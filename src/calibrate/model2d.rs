@@ -10,7 +10,7 @@ use super::runs::FieldRun;
 use crate::error::{Error, Result};
 use crate::lumped2d::{
     simulate_rock, FlightPiece, FrictionAngle, ImpactEvent, Material2d, Options2d, PathObserver, Profile, RockStart2d,
-    Rotation, SlidePiece, Slope2d, StopReason,
+    Rotation, SlidePiece, Slope2d, StopReason, PFEIFFER_BOWEN_MPS,
 };
 use crate::random::{stream, TruncNormal};
 use std::path::Path;
@@ -176,7 +176,14 @@ impl Model for Model2d {
         let mut zones = Vec::new();
         for e in &candidate.effects {
             match e.kind {
-                EffectKind::SpeedRestitution => options.scale_rn_by_velocity = true,
+                EffectKind::SpeedRestitution => {
+                    options.scale_rn_by_velocity = true;
+                    options.rn_velocity_scale_mps = p.get_or(&format!("{}.k_mps", e.label), PFEIFFER_BOWEN_MPS);
+                }
+                EffectKind::MassRestitution => {
+                    options.rn_mass_exponent = p.get_or(&format!("{}.exponent", e.label), 0.0);
+                    options.rn_reference_mass_kg = p.get_or(&format!("{}.reference_kg", e.label), 1000.0);
+                }
                 EffectKind::CrspRotation => options.rotation = Rotation::Crsp,
                 EffectKind::Zone => match &e.region {
                     Some(Region::Interval(iv)) => zones.push((e.label.clone(), *iv)),

@@ -303,17 +303,51 @@ pub fn steep_2d() -> Synthetic2d {
     }
 }
 
+/// A profile campaign where restitution decides the run-out (ours, for the speed case): an endless 25° slope with
+/// a bouncy material (Rn 0.6, Rt 0.8, friction 40°), releases 0.5, 2, 5, 10, 20 and 40 m above it, three runs per
+/// release point and mass. Impact speeds range from 3 to 28 m/s, so a restitution that falls with speed
+/// compresses the long drops' run-outs, which no single Rn can mimic.
+pub fn bouncy_2d() -> Synthetic2d {
+    Synthetic2d {
+        runs_per_group: 3,
+        profile: vec![(1000.0, 25.0)],
+        releases: vec![(4.0, 0.5), (8.0, 2.0), (12.0, 5.0), (16.0, 10.0), (20.0, 20.0), (24.0, 40.0)],
+        material: [0.6, 0.04, 0.8, 0.04, 40.0, 3.0],
+        ..Default::default()
+    }
+}
+
+/// The standard synthetic 2DLM cases (ours): `speed` hides Rn/(1 + (v_n/10 m/s)²) on [`bouncy_2d`]; `size` hides
+/// Rn (m/500 kg)^0.3 and `zone` a soft patch at x 2–9 m (Rn 0.1, Rt 0.5, friction 55°) on [`steep_2d`];
+/// `control_a` and `control_b` are the two designs with nothing hidden.
+pub fn case_2d(name: &str, seed: u64) -> Option<Synthetic2d> {
+    let (design, hidden) = match name {
+        "speed" => (bouncy_2d(), Hidden::SpeedRestitution(10.0)),
+        "size" => (steep_2d(), Hidden::MassRestitution(-0.3)),
+        "zone" => (steep_2d(), Hidden::SoftZone(vec![[2.0, 0.0], [9.0, 0.0]], [0.1, 0.5, 55.0])),
+        "control_a" => (bouncy_2d(), Hidden::None),
+        "control_b" => (steep_2d(), Hidden::None),
+        _ => return None,
+    };
+    Some(Synthetic2d { seed, hidden, ..design })
+}
+
 /// The true model of a synthetic 2DLM campaign: the profile's material, plus the hidden effect.
 pub fn truth_2d(spec: &Synthetic2d) -> Candidate {
-    let mut truth = Candidate { params: material_params_2d("ground", TRUE_2D), effects: Vec::new() };
+    let mut truth = Candidate { params: material_params_2d("ground", spec.material), effects: Vec::new() };
+    let mut hidden =
+        |kind| truth.effects.push(EffectSpec { kind, label: "hidden".into(), material: None, region: None });
     match &spec.hidden {
-        Hidden::None | Hidden::Roughness(_) | Hidden::MassRestitution(_) => {}
-        Hidden::SpeedRestitution(_) => truth.effects.push(EffectSpec {
-            kind: EffectKind::SpeedRestitution,
-            label: "hidden".into(),
-            material: None,
-            region: None,
-        }),
+        Hidden::None | Hidden::Roughness(_) => {}
+        Hidden::SpeedRestitution(k) => {
+            hidden(EffectKind::SpeedRestitution);
+            truth.params.set("hidden.k_mps", *k);
+        }
+        Hidden::MassRestitution(b) => {
+            hidden(EffectKind::MassRestitution);
+            truth.params.set("hidden.exponent", *b);
+            truth.params.set("hidden.reference_kg", 500.0);
+        }
         Hidden::SoftZone(iv, [rn, rt, f]) => {
             for (k, v) in material_params_2d("zonetrue", [*rn, 0.02, *rt, 0.02, *f, 3.0]).0 {
                 truth.params.set(k, v);
@@ -373,6 +407,8 @@ pub struct Synthetic2d {
     pub profile: Vec<(f64, f64)>,
     /// Release points: (x, height above the profile), m.
     pub releases: Vec<(f64, f64)>,
+    /// The true material `[rn, rn_sd, rt, rt_sd, friction °, roughness °]` (default [`TRUE_2D`]).
+    pub material: [f64; 6],
 }
 
 impl Default for Synthetic2d {
@@ -385,6 +421,7 @@ impl Default for Synthetic2d {
             noise_m: 0.5,
             profile: vec![(30.0, 15.0), (1000.0, 0.0)],
             releases: vec![(3.0, 0.5), (6.0, 5.0), (9.0, 15.0)],
+            material: TRUE_2D,
         }
     }
 }

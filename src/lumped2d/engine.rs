@@ -136,6 +136,7 @@ pub fn simulate_rock<O: PathObserver + ?Sized>(
         rng,
         obs: observer,
         radius,
+        rn_mass_factor: options.rn_mass_factor(start.mass_kg),
         spin: start.spin_radps,
         t: 0.0,
         events: 0,
@@ -161,9 +162,9 @@ pub fn simulate_rock<O: PathObserver + ?Sized>(
     }
 }
 
-/// Rn scaled by the normal impact speed (Pfeiffer & Bowen 1989): Rn/(1 + (|v_n|/9.144 m/s)²).
-pub fn pfeiffer_bowen_rn(rn: f64, normal_speed_mps: f64) -> f64 {
-    let r = normal_speed_mps / PFEIFFER_BOWEN_MPS;
+/// Rn scaled by the normal impact speed (Pfeiffer & Bowen 1989): Rn/(1 + (|v_n|/K)²), their K = 9.144 m/s.
+pub fn pfeiffer_bowen_rn(rn: f64, normal_speed_mps: f64, k_mps: f64) -> f64 {
+    let r = normal_speed_mps / k_mps;
     rn / (1.0 + r * r)
 }
 
@@ -197,6 +198,8 @@ struct Engine<'a, O: ?Sized> {
     rng: &'a mut Rng,
     obs: &'a mut O,
     radius: f64,
+    /// Factor on Rn from the rock's mass ([`Options2d::rn_mass_factor`]).
+    rn_mass_factor: f64,
     spin: f64,
     t: f64,
     events: u32,
@@ -352,7 +355,7 @@ impl<O: PathObserver + ?Sized> Engine<'_, O> {
         let sd = mat.roughness_sd_deg;
         let delta =
             if sd > 0.0 { TruncNormal { mean: 0.0, sd, min: -3.0 * sd, max: 3.0 * sd }.sample(self.rng) } else { 0.0 };
-        let rn = mat.rn.sample(self.rng);
+        let rn = (mat.rn.sample(self.rng) * self.rn_mass_factor).min(1.0);
         let rt = mat.rt.sample(self.rng);
         const HALVINGS: i32 = 8;
         let mut out = None;
@@ -365,7 +368,11 @@ impl<O: PathObserver + ?Sized> Engine<'_, O> {
             if vn >= 0.0 && k < HALVINGS {
                 continue; // not approaching the tilted surface
             }
-            let rn_eff = if self.opt.scale_rn_by_velocity { pfeiffer_bowen_rn(rn, vn.abs()) } else { rn };
+            let rn_eff = if self.opt.scale_rn_by_velocity {
+                pfeiffer_bowen_rn(rn, vn.abs(), self.opt.rn_velocity_scale_mps)
+            } else {
+                rn
+            };
             let (vt_out, spin_out) = self.tangential_rule(vt, vn, rn, rt);
             let vn_out = -rn_eff * vn;
             let vo = [vt_out * t[0] + vn_out * n[0], vt_out * t[1] + vn_out * n[1]];
@@ -542,8 +549,9 @@ mod tests {
 
     #[test]
     fn pfeiffer_bowen_halves_at_reference_speed() {
-        assert!((pfeiffer_bowen_rn(0.5, 9.144) - 0.25).abs() < 1e-15);
-        assert_eq!(pfeiffer_bowen_rn(0.5, 0.0), 0.5);
+        assert!((pfeiffer_bowen_rn(0.5, 9.144, PFEIFFER_BOWEN_MPS) - 0.25).abs() < 1e-15);
+        assert!((pfeiffer_bowen_rn(0.5, 3.0, 3.0) - 0.25).abs() < 1e-15);
+        assert_eq!(pfeiffer_bowen_rn(0.5, 0.0, PFEIFFER_BOWEN_MPS), 0.5);
     }
 
     #[test]
@@ -592,6 +600,7 @@ mod tests {
                 rng: &mut stream(1, 0),
                 obs: &mut (),
                 radius: 0.3,
+                rn_mass_factor: 1.0,
                 spin: 5.0,
                 t: 0.0,
                 events: 0,

@@ -39,9 +39,16 @@ pub enum FrictionSource {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Options2d {
-    /// Scale Rn by the normal impact speed (Pfeiffer & Bowen 1989): Rn′ = Rn/(1 + (|v_n|/9.144 m/s)²)
-    /// (default: false).
+    /// Scale Rn by the normal impact speed (Pfeiffer & Bowen 1989): Rn′ = Rn/(1 + (|v_n|/K)²), K =
+    /// `rn_velocity_scale_mps` (default: false).
     pub scale_rn_by_velocity: bool,
+    /// K of the Pfeiffer–Bowen rule, the normal speed at which Rn is halved, m/s (default: their 9.144 m/s).
+    pub rn_velocity_scale_mps: f64,
+    /// Scale Rn by the rock's mass: Rn′ = min(1, Rn (m/m_ref)^−β) with β this exponent (default: 0 = off;
+    /// physics.md §8's f_m, RocFall's "scale Rn by mass"; negative β makes heavier rocks bounce more).
+    pub rn_mass_exponent: f64,
+    /// m_ref of the mass rule, kg (default: 1000).
+    pub rn_reference_mass_kg: f64,
     /// Tangential impact rule with or without spin (default: [`Rotation::Off`]).
     pub rotation: Rotation,
     /// Override of the materials' friction rule (default: [`FrictionSource::Material`]).
@@ -72,6 +79,9 @@ impl Default for Options2d {
     fn default() -> Self {
         Options2d {
             scale_rn_by_velocity: false,
+            rn_velocity_scale_mps: super::engine::PFEIFFER_BOWEN_MPS,
+            rn_mass_exponent: 0.0,
+            rn_reference_mass_kg: 1000.0,
             rotation: Rotation::Off,
             friction_angle: FrictionSource::Material,
             rock_density_kg_m3: 2650.0,
@@ -86,6 +96,15 @@ impl Default for Options2d {
 }
 
 impl Options2d {
+    /// The factor on Rn for a rock of `mass_kg` (1 when the mass rule is off).
+    pub fn rn_mass_factor(&self, mass_kg: f64) -> f64 {
+        if self.rn_mass_exponent == 0.0 {
+            1.0
+        } else {
+            (mass_kg / self.rn_reference_mass_kg).powf(-self.rn_mass_exponent)
+        }
+    }
+
     /// Radius of a solid sphere of `mass_kg` at the rock density, m.
     pub fn radius_m(&self, mass_kg: f64) -> f64 {
         (3.0 * mass_kg / (4.0 * std::f64::consts::PI * self.rock_density_kg_m3)).cbrt()
@@ -109,6 +128,15 @@ impl Options2d {
             }
         };
         check("rock_density_kg_m3", self.rock_density_kg_m3, true)?;
+        check("rn_velocity_scale_mps", self.rn_velocity_scale_mps, true)?;
+        check("rn_reference_mass_kg", self.rn_reference_mass_kg, true)?;
+        if !self.rn_mass_exponent.is_finite() {
+            return Err(Error::invalid(
+                format!("{prefix}rn_mass_exponent"),
+                format!("must be a finite number, got {}", self.rn_mass_exponent),
+                "e.g. 0.3, or leave it out (0 = off)",
+            ));
+        }
         check("switch_speed_mps", self.switch_speed_mps, false)?;
         check("arrow_height_ratio", self.arrow_height_ratio, false)?;
         check("soft_landing_mps", self.soft_landing_mps, false)?;

@@ -42,6 +42,9 @@
 //! # Engine options (see `Options2d`; all optional).
 //! [options]
 //! scale_rn_by_velocity = false
+//! rn_velocity_scale_mps = 9.144 # K of Rn/(1 + (v_n/K)²)
+//! rn_mass_exponent = 0.0      # Rn (m/m_ref)^-β; 0 = off
+//! rn_reference_mass_kg = 1000.0
 //! rotation = "off"            # "off" | "rocfall" | "crsp"
 //! friction_angle = "material" # "material" | "from_rt" | "zero"
 //! switch_speed_mps = 0.5
