@@ -4,8 +4,8 @@
 //! with a ratio above 0.7 cannot show a 30 % cut however good the loop is.
 //!
 //! Run: cargo run --release --example explore_synthetic [-- NAME ...]   (2d_control_a 2d_control_b 2d_speed_steep
-//! 2d_speed 2d_size 2d_zone speed size zone control_a control_b; default: all; the 3DRB ones take about a minute
-//! each on 2 cores)
+//! 2d_speed 2d_size 2d_zone speed size zone control_a control_b 3d_designs; default: all but 3d_designs; the 3DRB
+//! ones take about a minute each on 2 cores, 3d_designs 12 minutes)
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::params::Candidate;
@@ -80,6 +80,49 @@ fn main() {
     if want("2d_speed_steep") {
         // Pfeiffer–Bowen as RocFall has it on the steep design: the true model is barely better (ratio ≈ 1).
         report_2d("2d_speed_steep", &Synthetic2d { hidden: Hidden::SpeedRestitution(9.144), ..steep_2d() });
+    }
+    if args.iter().any(|a| a == "3d_designs") {
+        // Three more 3DRB designs tried for issue 5 (ours), none below a ratio of 0.9: tumbling blocks scatter by
+        // tens of metres on their own. `bouncy`: rounded boulders dropped 0.5 to 40 m onto a 25° slope ending in a
+        // plain; `throw`: boulders thrown 2 to 40 m above a plain; `patch`: cubes on a 30° slope with a soft patch
+        // below one of the four release points.
+        let bouncy = Synthetic3d {
+            seed: 1,
+            runs_per_group: 6,
+            profile: vec![(40.0, 25.0), (1000.0, 0.0)],
+            release_heights_m: vec![0.5, 5.0, 15.0, 40.0],
+            material: [0.6, 0.02, 40.0, 32.0],
+            shape: "boulder".into(),
+            ..Default::default()
+        };
+        let throw = Synthetic3d {
+            profile: vec![(1000.0, 0.0)],
+            release_heights_m: vec![2.0, 8.0, 20.0, 40.0],
+            release_speed_mps: [3.0, 4.0],
+            ..bouncy.clone()
+        };
+        let patch = Synthetic3d {
+            seed: 1,
+            runs_per_group: 6,
+            profile: vec![(60.0, 30.0), (1000.0, 5.0)],
+            release_heights_m: vec![2.0],
+            material: [0.35, 0.02, 40.0, 32.0],
+            ..Default::default()
+        };
+        let zone = vec![[15.0, 8.0], [45.0, 8.0], [45.0, 32.0], [15.0, 32.0]];
+        let cases = [
+            ("bouncy_none", bouncy.clone()),
+            ("bouncy_k10", Synthetic3d { hidden: Hidden::SpeedRestitution(10.0), ..bouncy.clone() }),
+            ("bouncy_mass", Synthetic3d { hidden: Hidden::MassRestitution(-0.3), ..bouncy.clone() }),
+            ("throw_none", throw.clone()),
+            ("throw_k10", Synthetic3d { hidden: Hidden::SpeedRestitution(10.0), ..throw.clone() }),
+            ("throw_mass", Synthetic3d { hidden: Hidden::MassRestitution(-0.4), ..throw.clone() }),
+            ("patch_none", patch.clone()),
+            ("patch_zone", Synthetic3d { hidden: Hidden::SoftZone(zone, [0.05, 55.0, 50.0]), ..patch }),
+        ];
+        for (name, spec) in cases {
+            report(name, &spec);
+        }
     }
     for name in ["speed", "size", "zone", "control_a", "control_b"] {
         if want(name) {

@@ -129,6 +129,11 @@ pub struct TerrainSpec {
     /// Polygons that override the material of the triangles whose centre lies inside them, applied in order.
     #[serde(default)]
     pub zones: Vec<ZoneSpec>,
+    /// Keep only the triangles whose centre lies inside this polygon (x, y in the files' horizontal frame): the
+    /// part of the files where the surface is known, for DEMs with padded or extrapolated margins. A rock that
+    /// crosses its edge leaves the terrain (default: keep everything).
+    #[serde(default)]
+    pub clip: Option<Vec<[f64; 2]>>,
 }
 
 fn default_slope_face_deg() -> f64 {
@@ -413,6 +418,9 @@ impl ScenarioFile {
             }
             check_polygon(&f(&format!("terrain.zones[{i}].polygon")), &z.polygon)?;
         }
+        if let Some(clip) = &self.terrain.clip {
+            check_polygon(&f("terrain.clip"), clip)?;
+        }
         for (i, b) in self.barriers.iter().enumerate() {
             let field = f(&format!("barriers[{i}]"));
             if b.line.len() < 2 {
@@ -552,7 +560,7 @@ impl MaterialSpec {
     }
 }
 
-fn check_polygon(field: &str, pts: &[[f64; 2]]) -> Result<()> {
+pub(crate) fn check_polygon(field: &str, pts: &[[f64; 2]]) -> Result<()> {
     if pts.len() < 3 {
         return Err(Error::invalid(field, format!("has {} vertices", pts.len()), "give at least 3 [x, y] vertices"));
     }

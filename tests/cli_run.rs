@@ -193,6 +193,36 @@ fn with_terrain(dir: &Path, file: &str, body: &[u8]) -> PathBuf {
     sc
 }
 
+/// The scenario with `clip` under [terrain].
+fn clipped(dir: &Path, clip: &str) -> PathBuf {
+    let sc = scenario(dir, "", 0.3, "300.0");
+    let text =
+        std::fs::read_to_string(&sc).unwrap().replace("crs_epsg = 2056", &format!("crs_epsg = 2056\nclip = {clip}"));
+    std::fs::write(&sc, text).unwrap();
+    sc
+}
+
+#[test]
+fn a_clipped_terrain_ends_where_the_clip_polygon_does() {
+    // Only the slope (x < 500030 m) is kept: rocks that reach the floor leave the terrain at the clip's edge.
+    let dir = tempfile::tempdir().unwrap();
+    let sc = clipped(
+        dir.path(),
+        "[[500000.0, 5000000.0], [500030.0, 5000000.0], [500030.0, 5000040.0], [500000.0, 5000040.0]]",
+    );
+    let out = dir.path().join("out");
+    let o = talus().args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("endpoints.csv")).unwrap();
+    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 24);
+    for r in &rows {
+        let x: f64 = r[7].parse().unwrap();
+        assert!(x < 500032.0, "rock ends at x = {x}, past the clip");
+        assert_eq!(r[10], "left_terrain", "{r:?}");
+    }
+}
+
 #[test]
 fn bad_input_is_answered_with_where_what_and_how() {
     let dir = tempfile::tempdir().unwrap();
@@ -216,6 +246,9 @@ fn bad_input_is_answered_with_where_what_and_how() {
     );
     std::fs::write(&sc, text).unwrap();
     fails_cleanly(d, &sc, &["sources[0].points", "does not overlap the terrain"]);
+    // A clip polygon of two vertices, and one that misses the terrain.
+    fails_cleanly(d, &clipped(d, "[[0.0, 0.0], [1.0, 1.0]]"), &["terrain.clip", "2 vertices"]);
+    fails_cleanly(d, &clipped(d, "[[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]"), &["terrain.clip", "no triangle"]);
     // Cr of 1.5.
     fails_cleanly(d, &scenario(d, "", 1.5, "300.0"), &["materials.default.cr", "1.5"]);
     // A negative mass.

@@ -155,6 +155,8 @@ pub struct TerrainMap {
     pub material_names: BTreeMap<String, String>,
     /// Declared zones (polygons of another material).
     pub zones: Vec<ZoneSpec>,
+    /// Keep only the terrain inside this polygon (see [`crate::scenario::TerrainSpec::clip`]).
+    pub clip: Option<Vec<[f64; 2]>>,
 }
 
 /// The objective the population fit minimises.
@@ -398,6 +400,12 @@ impl CalibrationConfig {
             ));
         }
         self.options2d.validate(&format!("{source}: options2d."))?;
+        for (i, z) in self.terrain.zones.iter().enumerate() {
+            crate::scenario::check_polygon(&f(&format!("terrain.zones[{i}].polygon")), &z.polygon)?;
+        }
+        if let Some(clip) = &self.terrain.clip {
+            crate::scenario::check_polygon(&f("terrain.clip"), clip)?;
+        }
         let e = &self.effects;
         let in_range = (0.0..1.0).contains(&e.min_improvement)
             && e.alpha > 0.0

@@ -77,6 +77,7 @@ impl Model3d {
             slope_face_deg: map.slope_face_deg.unwrap_or(45.0),
             material_names: map.material_names.clone(),
             zones: map.zones.clone(),
+            clip: map.clip.clone(),
         };
         let terrain = crate::terrain::build::build_terrain(
             &[terrain_file.to_path_buf()],

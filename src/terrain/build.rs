@@ -172,6 +172,27 @@ pub fn assemble_terrain(
             });
         }
     }
+    if let Some(clip) = &spec.clip {
+        let poly: Vec<[f64; 2]> = clip.iter().map(|p| horizontal_to_local(up, &origin, *p)).collect();
+        let keep: Vec<bool> = triangles
+            .iter()
+            .map(|tri| {
+                let c = tri.iter().fold(Vector3::zeros(), |acc, &k| acc + vertices[k as usize]) / 3.0;
+                point_in_polygon(c.x, c.y, &poly)
+            })
+            .collect();
+        let mut k = keep.iter();
+        triangles.retain(|_| *k.next().unwrap_or(&false));
+        let mut k = keep.iter();
+        names.retain(|_| *k.next().unwrap_or(&false));
+        if triangles.is_empty() {
+            return Err(Error::invalid(
+                format!("{}: terrain.clip", scenario.display()),
+                "no triangle of the terrain has its centre inside the clip polygon",
+                "give the polygon in the terrain files' horizontal coordinates",
+            ));
+        }
+    }
     if triangles.is_empty() {
         return Err(Error::invalid(
             format!("{}: terrain.files", scenario.display()),
