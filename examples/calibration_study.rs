@@ -34,7 +34,7 @@ fn main() {
             hidden,
         ));
     }
-    for base in ["control_a", "control_b"] {
+    for base in ["control_a", "control_b", "control_c"] {
         for s in seeds {
             let spec = case_3d(base, s).unwrap();
             cases.push((

@@ -5,7 +5,7 @@
 //!
 //! Run: cargo run --release --example explore_synthetic [-- NAME ...]   (2d_control_a 2d_control_b 2d_speed_steep
 //! 2d_speed 2d_size 2d_zone speed size zone control_a control_b 3d_designs; default: all but 3d_designs; the 3DRB
-//! ones take about a minute each on 2 cores, 3d_designs 12 minutes)
+//! ones take about a minute each on 2 cores, 3d_designs 15 minutes)
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::params::Candidate;
@@ -82,10 +82,12 @@ fn main() {
         report_2d("2d_speed_steep", &Synthetic2d { hidden: Hidden::SpeedRestitution(9.144), ..steep_2d() });
     }
     if args.iter().any(|a| a == "3d_designs") {
-        // Three more 3DRB designs tried for issue 5 (ours), none below a ratio of 0.9: tumbling blocks scatter by
+        // Four more 3DRB designs tried for issue 5 (ours), none below a ratio of 0.9: tumbling blocks scatter by
         // tens of metres on their own. `bouncy`: rounded boulders dropped 0.5 to 40 m onto a 25° slope ending in a
         // plain; `throw`: boulders thrown 2 to 40 m above a plain; `patch`: cubes on a 30° slope with a soft patch
-        // below one of the four release points.
+        // below one of the four release points; `plain`: the design of `case_3d("zone")` with a patch of low Cr and
+        // high friction instead of drag (Cr and friction alone do not stop a rolling block: the patch changes
+        // nothing).
         let bouncy = Synthetic3d {
             seed: 1,
             runs_per_group: 6,
@@ -110,6 +112,14 @@ fn main() {
             ..Default::default()
         };
         let zone = vec![[15.0, 8.0], [45.0, 8.0], [45.0, 32.0], [15.0, 32.0]];
+        let plain = Synthetic3d {
+            profile: vec![(20.0, 30.0), (1000.0, 8.0)],
+            release_heights_m: vec![2.0],
+            material: [0.35, 0.02, 40.0, 32.0],
+            shape: "boulder".into(),
+            ..patch.clone()
+        };
+        let plain_zone = vec![[20.0, 0.0], [60.0, 0.0], [60.0, 57.0], [20.0, 57.0]];
         let cases = [
             ("bouncy_none", bouncy.clone()),
             ("bouncy_k10", Synthetic3d { hidden: Hidden::SpeedRestitution(10.0), ..bouncy.clone() }),
@@ -119,12 +129,17 @@ fn main() {
             ("throw_mass", Synthetic3d { hidden: Hidden::MassRestitution(-0.4), ..throw.clone() }),
             ("patch_none", patch.clone()),
             ("patch_zone", Synthetic3d { hidden: Hidden::SoftZone(zone, [0.05, 55.0, 50.0]), ..patch }),
+            ("plain_none", plain.clone()),
+            ("plain_zone", Synthetic3d { hidden: Hidden::SoftZone(plain_zone, [0.05, 55.0, 50.0]), ..plain }),
         ];
         for (name, spec) in cases {
+            if args.len() > 1 && !args.iter().any(|a| a == name) {
+                continue;
+            }
             report(name, &spec);
         }
     }
-    for name in ["speed", "size", "zone", "control_a", "control_b"] {
+    for name in ["speed", "size", "zone", "control_a", "control_b", "control_c"] {
         if want(name) {
             report(name, &case_3d(name, 1).unwrap());
         }

@@ -168,6 +168,8 @@ pub struct MaterialSpec {
     pub static_friction_deg: Option<f64>,
     /// Dynamic friction angle, degrees.
     pub dynamic_friction_deg: Option<f64>,
+    /// Soft-ground drag rate while in contact, 1/s (default 0: none).
+    pub drag_per_s: Option<f64>,
 }
 
 /// `[[sources]]`.
@@ -536,6 +538,7 @@ impl MaterialSpec {
                     cr: TruncNormal::three_sigma(mean, self.cr_sd.unwrap_or(0.0), 0.0, 1.0),
                     static_friction_deg: need(self.static_friction_deg, "static_friction_deg")?,
                     dynamic_friction_deg: need(self.dynamic_friction_deg, "dynamic_friction_deg")?,
+                    drag_per_s: 0.0,
                 }
             }
         };
@@ -551,6 +554,9 @@ impl MaterialSpec {
         }
         if let Some(v) = self.cr_min {
             m.cr.min = v;
+        }
+        if let Some(v) = self.drag_per_s {
+            m.drag_per_s = v;
         }
         if let Some(v) = self.cr_max {
             m.cr.max = v;

@@ -13,6 +13,7 @@ fn material(cr: f64, static_deg: f64, dynamic_deg: f64) -> Material {
         cr: TruncNormal::fixed(cr),
         static_friction_deg: static_deg,
         dynamic_friction_deg: dynamic_deg,
+        drag_per_s: 0.0,
     }
 }
 
@@ -150,6 +151,21 @@ fn block_sliding_down_an_incline_stops_where_the_closed_form_says() {
 }
 
 #[test]
+fn drag_on_soft_ground_stops_a_frictionless_block_after_v0_over_c() {
+    // On a flat frictionless plane with drag c, v(t) = v0 e^(−ct): the block glides v0/c (less the last
+    // < 0.1 m/s it spends below the rest speed, under 3 % here).
+    let c = 2.0;
+    let terrain = incline(0.0, Material { drag_per_s: c, ..material(0.0, 0.0, 0.0) });
+    let r = rock(ShapeKind::FlatBox, 1000.0);
+    let v0 = 4.0;
+    let start = resting_on_incline(&r, 0.0, 60.0, v0);
+    let out = simulate(&terrain, &r, start, &SimParams::default(), &mut stream(1, 0), &mut ());
+    assert_eq!(out.stop_reason, StopReason::Stopped);
+    let moved = (out.final_state.position_m - start.position_m).norm();
+    assert_relative_eq!(moved, v0 / c, max_relative = 0.03);
+}
+
+#[test]
 fn block_on_an_incline_below_its_static_friction_angle_stays_put() {
     let terrain = incline(25.0, material(0.0, 30.0, 20.0));
     let r = rock(ShapeKind::FlatBox, 1000.0);
@@ -188,6 +204,7 @@ fn no_impact_adds_energy_and_no_rock_ends_below_the_surface() {
         cr: TruncNormal { mean: 0.6, sd: 0.3, min: 0.0, max: 1.0 },
         static_friction_deg: 35.0,
         dynamic_friction_deg: 30.0,
+        drag_per_s: 0.0,
     };
     let terrain = rough_slope(m);
     let params = SimParams { cr_draw: talus::sim::CrDraw::PerImpact, max_time_s: 30.0, ..Default::default() };

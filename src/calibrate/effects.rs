@@ -65,6 +65,10 @@ pub fn is_restitution(kind: EffectKind) -> bool {
 /// Zone mobility factors tried for a new zone, relative to the material it replaces (ours).
 pub const ZONE_MOBILITY_GRID: [f64; 4] = [0.2, 0.4, 0.7, 1.5];
 
+/// Soft-ground drag rates tried for a new 3DRB zone (with its material otherwise unchanged), 1/s (ours): soft
+/// ground stops a rolling block by drag, which a lower Cr and a higher friction alone do not.
+pub const ZONE_DRAG_GRID: [f64; 3] = [3.0, 10.0, 30.0];
+
 const SPEED_3D: EffectDef = EffectDef {
     kind: EffectKind::SpeedRestitution,
     name: "speed_restitution",
@@ -133,7 +137,7 @@ const ZONE: EffectDef = EffectDef {
     grid: &ZONE_MOBILITY_GRID,
     bounds: (0.0, 0.0),
     signature: &["deposition_excess"],
-    formula: "a polygon (3DRB) or interval (2DLM) where observed runs stop and simulated ones do not, given its own fitted material (ours: derived from the residual and deposition maps)",
+    formula: "a polygon (3DRB) or interval (2DLM) where observed runs stop and simulated ones do not, given its own fitted material, in 3DRB with its own soft-ground drag (ours: derived from the residual and deposition maps)",
 };
 
 const SPEED_2D: EffectDef = EffectDef {

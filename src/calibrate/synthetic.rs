@@ -35,6 +35,8 @@ pub enum Hidden {
     MassRestitution(f64),
     /// A soft zone: polygon (x, y) and its material (Cr mean, static °, dynamic °).
     SoftZone(Vec<[f64; 2]>, [f64; 3]),
+    /// A zone of soft ground (3DRB): polygon (x, y) of the terrain's material plus drag at this rate, 1/s.
+    DragZone(Vec<[f64; 2]>, f64),
 }
 
 impl Hidden {
@@ -45,14 +47,14 @@ impl Hidden {
             Hidden::SpeedRestitution(_) => Some(EffectKind::SpeedRestitution),
             Hidden::Roughness(_) => Some(EffectKind::Roughness),
             Hidden::MassRestitution(_) => Some(EffectKind::MassRestitution),
-            Hidden::SoftZone(..) => Some(EffectKind::Zone),
+            Hidden::SoftZone(..) | Hidden::DragZone(..) => Some(EffectKind::Zone),
         }
     }
 
     /// The zone polygon, if any.
     pub fn polygon(&self) -> Option<&[[f64; 2]]> {
         match self {
-            Hidden::SoftZone(p, _) => Some(p),
+            Hidden::SoftZone(p, _) | Hidden::DragZone(p, _) => Some(p),
             _ => None,
         }
     }
@@ -160,11 +162,13 @@ pub const TRUE_3D: [f64; 4] = [0.35, 0.05, 40.0, 32.0];
 
 /// The standard synthetic 3DRB cases (ours, chosen so that the hidden effect moves run-outs by more than the
 /// campaign's own scatter, which is what a ≥ 30 % cut of the held-out MAE needs):
-/// - `speed` and `zone` (and `control_a`): rounded boulders; on the southern half they are thrown (3–4 m/s) off
-///   20 m high release points onto a flat plain, on the northern half they start 0.5 m above a 20 m long 20° apron
-///   that ends in the plain. Restitution Cr 0.6. `speed` hides Cr' = Cr/(1 + (v_n/6 m/s)²): the thrown blocks hit
-///   fast and lose almost everything, the rolling ones hit slowly and keep most. `zone` hides a soft patch (Cr 0.05,
-///   friction 55°/50°) where the blocks thrown from the southernmost point land ([`standard_zone`]).
+/// - `speed` (and `control_a`): rounded boulders; on the southern half they are thrown (3–4 m/s) off 20 m high
+///   release points onto a flat plain, on the northern half they start 0.5 m above a 20 m long 20° apron that ends
+///   in the plain. Restitution Cr 0.6. `speed` hides Cr' = Cr/(1 + (v_n/6 m/s)²): the thrown blocks hit fast and
+///   lose almost everything, the rolling ones hit slowly and keep most.
+/// - `zone` (and `control_c`): rounded boulders start 2 m above a 20 m long 30° slope that ends in an 8° plain, on
+///   which they roll off the 160 m terrain; `zone` hides soft ground (drag 20/s, [`standard_zone`]) on the plain
+///   below the two southern release points.
 /// - `size` (and `control_b`): cubes dropped 0.5 to 20 m onto a 15° apron; `size` hides Cr' = Cr (m/150 kg)^0.4, so
 ///   the 20 kg blocks bounce less and the 1200 kg ones more.
 pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
@@ -180,20 +184,29 @@ pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
         ..Default::default()
     };
     let drops = Synthetic3d { seed, runs_per_group: 6, material: [0.35, 0.02, 40.0, 32.0], ..Default::default() };
+    let plain = Synthetic3d {
+        seed,
+        runs_per_group: 6,
+        profile: vec![(20.0, 30.0), (1000.0, 8.0)],
+        release_heights_m: vec![2.0],
+        material: [0.35, 0.02, 40.0, 32.0],
+        shape: "boulder".into(),
+        ..Default::default()
+    };
     Some(match name {
         "speed" => Synthetic3d { hidden: Hidden::SpeedRestitution(6.0), ..two_regime },
-        "zone" => Synthetic3d { hidden: Hidden::SoftZone(standard_zone(), [0.05, 55.0, 50.0]), ..two_regime },
+        "zone" => Synthetic3d { hidden: Hidden::DragZone(standard_zone(), 20.0), ..plain },
         "control_a" => two_regime,
+        "control_c" => plain,
         "size" => Synthetic3d { hidden: Hidden::MassRestitution(-0.4), ..drops },
         "control_b" => drops,
         _ => return None,
     })
 }
 
-/// The soft-zone polygon of the standard zone case: the plain below the southernmost release point only (so that no
-/// effect tied to the thrown blocks as such can stand in for it).
+/// The soft-ground polygon of the standard zone case: 40 m of the plain below the two southern release points.
 pub fn standard_zone() -> Vec<[f64; 2]> {
-    vec![[6.0, 0.0], [40.0, 0.0], [40.0, 33.0], [6.0, 33.0]]
+    vec![[20.0, 0.0], [60.0, 0.0], [60.0, 57.0], [20.0, 57.0]]
 }
 
 /// Builds the synthetic 3DRB campaign: the model (with the terrain's declared material only) and the runs'
@@ -204,6 +217,7 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
         cr: TruncNormal::three_sigma(v[0], v[1], 0.0, 1.0),
         static_friction_deg: v[2],
         dynamic_friction_deg: v[3],
+        drag_per_s: 0.0,
     };
     let n = (160.0 / spec.cell_m).round() as usize;
     let terrain = Terrain::from_function(160.0, n, mat("default", spec.material), |x, y| spec.height_m(x, y))?;
@@ -277,8 +291,12 @@ pub fn truth_3d(spec: &Synthetic3d) -> Candidate {
             truth.params.set("hidden.reference_kg", 150.0);
             truth.effects.push(hidden(EffectKind::MassRestitution));
         }
-        Hidden::SoftZone(poly, [cr, s, d]) => {
-            for (k, v) in material_params_3d("zonetrue", [*cr, 0.02, *s, *d]).0 {
+        Hidden::SoftZone(poly, _) | Hidden::DragZone(poly, _) => {
+            let material = match &spec.hidden {
+                Hidden::SoftZone(_, [cr, s, d]) => [*cr, 0.02, *s, *d],
+                _ => spec.material,
+            };
+            for (k, v) in material_params_3d("zonetrue", material).0 {
                 truth.params.set(k, v);
             }
             truth.effects.push(EffectSpec {
@@ -287,6 +305,9 @@ pub fn truth_3d(spec: &Synthetic3d) -> Candidate {
                 material: None,
                 region: Some(Region::Polygon(poly.clone())),
             });
+            if let Hidden::DragZone(_, rate) = &spec.hidden {
+                truth.params.set("zonetrue.drag_per_s", *rate);
+            }
         }
     }
     truth
@@ -338,7 +359,7 @@ pub fn truth_2d(spec: &Synthetic2d) -> Candidate {
     let mut hidden =
         |kind| truth.effects.push(EffectSpec { kind, label: "hidden".into(), material: None, region: None });
     match &spec.hidden {
-        Hidden::None | Hidden::Roughness(_) => {}
+        Hidden::None | Hidden::Roughness(_) | Hidden::DragZone(..) => {}
         Hidden::SpeedRestitution(k) => {
             hidden(EffectKind::SpeedRestitution);
             truth.params.set("hidden.k_mps", *k);

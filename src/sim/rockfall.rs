@@ -195,7 +195,8 @@ struct Run<'a> {
     cr: Vec<f64>,
     touching: Vec<bool>,
     barrier_met: Vec<bool>,
-    soft: Vec<bool>,
+    /// Soft-ground drag rate of each material, 1/s: its own, or the `soft_drag_per_s` effect's where that acts.
+    drag_per_s: Vec<f64>,
     contacts: Vec<Contact>,
     previous: Vec<Contact>,
     scratch: Scratch,
@@ -250,10 +251,17 @@ impl<'a> Run<'a> {
             cr,
             touching: vec![false; rock.vertices_m.len()],
             barrier_met: vec![false; terrain.barriers.len()],
-            soft: terrain
+            drag_per_s: terrain
                 .materials
                 .iter()
-                .map(|m| params.effects.soft_materials.is_empty() || params.effects.soft_materials.contains(&m.name))
+                .map(|m| {
+                    let fx = &params.effects;
+                    let listed = fx.soft_materials.is_empty() || fx.soft_materials.contains(&m.name);
+                    match fx.soft_drag_per_s {
+                        Some(c) if listed => c.max(m.drag_per_s),
+                        _ => m.drag_per_s,
+                    }
+                })
                 .collect(),
             contacts: Vec::with_capacity(16),
             previous: Vec::with_capacity(16),
@@ -500,7 +508,8 @@ impl<'a> Run<'a> {
         in_contact
     }
 
-    /// Rolling resistance and soft-ground drag (when on) on a rock in contact over a step of `h`.
+    /// Rolling resistance (when on) and soft-ground drag (the largest rate among the touched materials) on a rock in
+    /// contact over a step of `h`.
     fn brake(&self, vel: &mut Velocities, h: f64) {
         let effects = &self.params.effects;
         if let Some(mu_r) = effects.rolling_resistance {
@@ -515,14 +524,15 @@ impl<'a> Run<'a> {
                 vel.angular_body_radps *= f;
             }
         }
-        if let Some(c) = effects.soft_drag_per_s {
-            let on_soft =
-                self.contacts.iter().any(|k| self.soft[self.terrain.triangle_material[k.triangle as usize] as usize]);
-            if on_soft {
-                let f = (-c * h).exp();
-                vel.linear_mps *= f;
-                vel.angular_body_radps *= f;
-            }
+        let c = self
+            .contacts
+            .iter()
+            .map(|k| self.drag_per_s[self.terrain.triangle_material[k.triangle as usize] as usize])
+            .fold(0.0, f64::max);
+        if c > 0.0 {
+            let f = (-c * h).exp();
+            vel.linear_mps *= f;
+            vel.angular_body_radps *= f;
         }
     }
 

@@ -15,6 +15,9 @@ pub struct Material {
     pub static_friction_deg: f64,
     /// Dynamic friction angle, degrees: a slipping contact gets |P_t| = tan(φ_d)·P_n.
     pub dynamic_friction_deg: f64,
+    /// Soft-ground drag: while a rock touches this material its velocity and spin decay as exp(−c·t), c this
+    /// rate, 1/s (0 = none; a linear stand-in for RAMMS's scarring drag, Lu et al. 2019, physics.md §2; ours).
+    pub drag_per_s: f64,
 }
 
 /// The seed paper's Table 2 (3DRB calibrated parameters): (preset name, Cr mean, Cr sd, static °, dynamic °).
@@ -36,6 +39,7 @@ impl Material {
             cr: TruncNormal::three_sigma(m, sd, 0.0, 1.0),
             static_friction_deg: s,
             dynamic_friction_deg: d,
+            drag_per_s: 0.0,
         })
     }
 
@@ -52,6 +56,13 @@ impl Material {
                     "give a friction angle such as 40",
                 ));
             }
+        }
+        if !(self.drag_per_s.is_finite() && self.drag_per_s >= 0.0) {
+            return Err(Error::invalid(
+                format!("{field}.drag_per_s"),
+                format!("must be a non-negative rate, got {}", self.drag_per_s),
+                "give 0 (no drag) or a rate such as 3",
+            ));
         }
         if self.dynamic_friction_deg > self.static_friction_deg {
             return Err(Error::invalid(
