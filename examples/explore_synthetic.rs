@@ -10,8 +10,8 @@ use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::params::Candidate;
 use talus::calibrate::synthetic::{
-    case_2d, case_3d, material_params_2d, material_params_3d, steep_2d, synthetic_2d, synthetic_3d, truth_2d, truth_3d,
-    Hidden, Synthetic2d, Synthetic3d, TRUE_2D,
+    case_2d, case_3d, material_params_2d, material_params_3d, standard_zone, steep_2d, synthetic_2d, synthetic_3d,
+    truth_2d, truth_3d, Hidden, Synthetic2d, Synthetic3d, TRUE_2D,
 };
 use talus::calibrate::Model;
 use talus::lumped2d::Options2d;
@@ -112,14 +112,7 @@ fn main() {
             ..Default::default()
         };
         let zone = vec![[15.0, 8.0], [45.0, 8.0], [45.0, 32.0], [15.0, 32.0]];
-        let plain = Synthetic3d {
-            profile: vec![(20.0, 30.0), (1000.0, 8.0)],
-            release_heights_m: vec![2.0],
-            material: [0.35, 0.02, 40.0, 32.0],
-            shape: "boulder".into(),
-            ..patch.clone()
-        };
-        let plain_zone = vec![[20.0, 0.0], [60.0, 0.0], [60.0, 57.0], [20.0, 57.0]];
+        let plain = case_3d("control_c", 1).unwrap();
         let cases = [
             ("bouncy_none", bouncy.clone()),
             ("bouncy_k10", Synthetic3d { hidden: Hidden::SpeedRestitution(10.0), ..bouncy.clone() }),
@@ -130,7 +123,7 @@ fn main() {
             ("patch_none", patch.clone()),
             ("patch_zone", Synthetic3d { hidden: Hidden::SoftZone(zone, [0.05, 55.0, 50.0]), ..patch }),
             ("plain_none", plain.clone()),
-            ("plain_zone", Synthetic3d { hidden: Hidden::SoftZone(plain_zone, [0.05, 55.0, 50.0]), ..plain }),
+            ("plain_zone", Synthetic3d { hidden: Hidden::SoftZone(standard_zone(), [0.05, 55.0, 50.0]), ..plain }),
         ];
         for (name, spec) in cases {
             if args.len() > 1 && !args.iter().any(|a| a == name) {

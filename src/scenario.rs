@@ -555,11 +555,11 @@ impl MaterialSpec {
         if let Some(v) = self.cr_min {
             m.cr.min = v;
         }
-        if let Some(v) = self.drag_per_s {
-            m.drag_per_s = v;
-        }
         if let Some(v) = self.cr_max {
             m.cr.max = v;
+        }
+        if let Some(v) = self.drag_per_s {
+            m.drag_per_s = v;
         }
         m.validate(field)?;
         Ok(m)

@@ -275,42 +275,46 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
 /// The true model of a synthetic 3DRB campaign: the terrain's material, plus the hidden effect.
 pub fn truth_3d(spec: &Synthetic3d) -> Candidate {
     let mut truth = Candidate { params: material_params_3d("default", spec.material), ..Default::default() };
-    let hidden = |kind| EffectSpec { kind, label: "hidden".into(), material: None, region: None };
     match &spec.hidden {
         Hidden::None => {}
         Hidden::SpeedRestitution(k) => {
             truth.params.set("hidden.k_mps", *k);
-            truth.effects.push(hidden(EffectKind::SpeedRestitution));
+            truth.effects.push(hidden_effect(EffectKind::SpeedRestitution));
         }
         Hidden::Roughness(r) => {
             truth.params.set("hidden.rough_m", *r);
-            truth.effects.push(hidden(EffectKind::Roughness));
+            truth.effects.push(hidden_effect(EffectKind::Roughness));
         }
         Hidden::MassRestitution(b) => {
             truth.params.set("hidden.exponent", *b);
             truth.params.set("hidden.reference_kg", 150.0);
-            truth.effects.push(hidden(EffectKind::MassRestitution));
+            truth.effects.push(hidden_effect(EffectKind::MassRestitution));
         }
-        Hidden::SoftZone(poly, _) | Hidden::DragZone(poly, _) => {
-            let material = match &spec.hidden {
-                Hidden::SoftZone(_, [cr, s, d]) => [*cr, 0.02, *s, *d],
-                _ => spec.material,
-            };
-            for (k, v) in material_params_3d("zonetrue", material).0 {
-                truth.params.set(k, v);
-            }
-            truth.effects.push(EffectSpec {
-                kind: EffectKind::Zone,
-                label: "zonetrue".into(),
-                material: None,
-                region: Some(Region::Polygon(poly.clone())),
-            });
-            if let Hidden::DragZone(_, rate) = &spec.hidden {
-                truth.params.set("zonetrue.drag_per_s", *rate);
-            }
-        }
+        Hidden::SoftZone(poly, [cr, s, d]) => add_zone_3d(&mut truth, poly, [*cr, 0.02, *s, *d], 0.0),
+        Hidden::DragZone(poly, rate) => add_zone_3d(&mut truth, poly, spec.material, *rate),
     }
     truth
+}
+
+/// The hidden effect `kind` as the truth carries it (its parameters under `hidden.`).
+fn hidden_effect(kind: EffectKind) -> EffectSpec {
+    EffectSpec { kind, label: "hidden".into(), material: None, region: None }
+}
+
+/// The hidden zone over `region` (its material under `zonetrue.`).
+fn hidden_zone(region: Region) -> EffectSpec {
+    EffectSpec { kind: EffectKind::Zone, label: "zonetrue".into(), material: None, region: Some(region) }
+}
+
+/// Adds a hidden 3DRB zone over `poly` with `material` and, when positive, soft-ground drag to `truth`.
+fn add_zone_3d(truth: &mut Candidate, poly: &[[f64; 2]], material: [f64; 4], drag_per_s: f64) {
+    for (k, v) in material_params_3d("zonetrue", material).0 {
+        truth.params.set(k, v);
+    }
+    if drag_per_s > 0.0 {
+        truth.params.set("zonetrue.drag_per_s", drag_per_s);
+    }
+    truth.effects.push(hidden_zone(Region::Polygon(poly.to_vec())));
 }
 
 /// A profile campaign with long run-outs (ours): a 35° slope 40 m long, a 10° apron 30 m long and a flat floor;
@@ -356,16 +360,14 @@ pub fn case_2d(name: &str, seed: u64) -> Option<Synthetic2d> {
 /// The true model of a synthetic 2DLM campaign: the profile's material, plus the hidden effect.
 pub fn truth_2d(spec: &Synthetic2d) -> Candidate {
     let mut truth = Candidate { params: material_params_2d("ground", spec.material), effects: Vec::new() };
-    let mut hidden =
-        |kind| truth.effects.push(EffectSpec { kind, label: "hidden".into(), material: None, region: None });
     match &spec.hidden {
         Hidden::None | Hidden::Roughness(_) | Hidden::DragZone(..) => {}
         Hidden::SpeedRestitution(k) => {
-            hidden(EffectKind::SpeedRestitution);
+            truth.effects.push(hidden_effect(EffectKind::SpeedRestitution));
             truth.params.set("hidden.k_mps", *k);
         }
         Hidden::MassRestitution(b) => {
-            hidden(EffectKind::MassRestitution);
+            truth.effects.push(hidden_effect(EffectKind::MassRestitution));
             truth.params.set("hidden.exponent", *b);
             truth.params.set("hidden.reference_kg", 500.0);
         }
@@ -373,12 +375,7 @@ pub fn truth_2d(spec: &Synthetic2d) -> Candidate {
             for (k, v) in material_params_2d("zonetrue", [*rn, 0.02, *rt, 0.02, *f, 3.0]).0 {
                 truth.params.set(k, v);
             }
-            truth.effects.push(EffectSpec {
-                kind: EffectKind::Zone,
-                label: "zonetrue".into(),
-                material: None,
-                region: Some(Region::Interval([iv[0][0], iv[1][0]])),
-            });
+            truth.effects.push(hidden_zone(Region::Interval([iv[0][0], iv[1][0]])));
         }
     }
     truth

@@ -174,17 +174,14 @@ pub fn assemble_terrain(
     }
     if let Some(clip) = &spec.clip {
         let poly: Vec<[f64; 2]> = clip.iter().map(|p| horizontal_to_local(up, &origin, *p)).collect();
-        let keep: Vec<bool> = triangles
-            .iter()
-            .map(|tri| {
-                let c = tri.iter().fold(Vector3::zeros(), |acc, &k| acc + vertices[k as usize]) / 3.0;
+        (triangles, names) = triangles
+            .into_iter()
+            .zip(names)
+            .filter(|(tri, _)| {
+                let c = centre(&vertices, tri);
                 point_in_polygon(c.x, c.y, &poly)
             })
-            .collect();
-        let mut k = keep.iter();
-        triangles.retain(|_| *k.next().unwrap_or(&false));
-        let mut k = keep.iter();
-        names.retain(|_| *k.next().unwrap_or(&false));
+            .unzip();
         if triangles.is_empty() {
             return Err(Error::invalid(
                 format!("{}: terrain.clip", scenario.display()),
@@ -246,7 +243,7 @@ pub fn assemble_terrain(
         let m = index_of(&zone.material).unwrap_or(0) as u16;
         let poly: Vec<[f64; 2]> = zone.polygon.iter().map(|p| horizontal_to_local(up, &origin, *p)).collect();
         for (t, tri) in triangles.iter().enumerate() {
-            let c = tri.iter().fold(Vector3::zeros(), |acc, &k| acc + vertices[k as usize]) / 3.0;
+            let c = centre(&vertices, tri);
             if point_in_polygon(c.x, c.y, &poly) {
                 tri_mat[t] = m;
             }
@@ -263,4 +260,9 @@ pub fn assemble_terrain(
     terrain.up = up;
     terrain.crs = crs;
     Ok(terrain)
+}
+
+/// The centre of triangle `tri` of `vertices`.
+fn centre(vertices: &[Vector3<f64>], tri: &[u32; 3]) -> Vector3<f64> {
+    tri.iter().fold(Vector3::zeros(), |acc, &k| acc + vertices[k as usize]) / 3.0
 }
