@@ -47,6 +47,7 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
     assert!(c.report.effects_added.is_empty(), "{:?}", c.report.effects_added);
 }
 
+/// Tiny settings for the 3DRB tests (the engine runs in a debug build here).
 fn tiny_3d() -> CalibrationConfig {
     let mut cfg = CalibrationConfig {
         repeats: 6,
