@@ -1,7 +1,7 @@
 //! Synthetic-effect study of `talus calibrate` (issue 5): campaigns made with talus itself with an effect switched
 //! on (speed-dependent restitution, restitution scaling with block mass, a soft zone), plus controls without one,
 //! calibrated with the effect undeclared. Writes `outputs/calibration_study/summary.json` (and one line per case
-//! on stdout), and a full report per case.
+//! on stdout; a case run again replaces its row, the others keep theirs), and a full report per case.
 //!
 //! Run: cargo run --release --example calibration_study [-- CASE ...]   (cases: speed size zone control_a_N
 //! control_b_N 2d_speed 2d_size 2d_zone 2d_control_a_N 2d_control_b_N, N = 1..3, a trailing * matches a prefix;
@@ -22,7 +22,10 @@ fn main() {
     };
     let out = std::path::PathBuf::from("outputs/calibration_study");
     std::fs::create_dir_all(&out).unwrap();
-    let mut rows = Vec::new();
+    // Cases not run this time keep their rows from an earlier summary.
+    let summary = out.join("summary.json");
+    let mut rows: Vec<serde_json::Value> =
+        std::fs::read_to_string(&summary).ok().and_then(|t| serde_json::from_str(&t).ok()).unwrap_or_default();
     let mut cases: Vec<(String, MakeModel, Hidden)> = Vec::new();
     let seeds = [1u64, 2, 3];
     for name in ["speed", "size", "zone"] {
@@ -90,7 +93,8 @@ fn main() {
             "baseline_parameters": r.baseline.parameters, "final_parameters": r.final_stage.parameters,
         });
         println!("{row}");
+        rows.retain(|r| r["case"] != name.as_str());
         rows.push(row);
-        std::fs::write(out.join("summary.json"), serde_json::to_string_pretty(&rows).unwrap()).unwrap();
+        std::fs::write(&summary, serde_json::to_string_pretty(&rows).unwrap()).unwrap();
     }
 }

@@ -166,6 +166,27 @@ fn drag_on_soft_ground_stops_a_frictionless_block_after_v0_over_c() {
 }
 
 #[test]
+fn vegetation_drag_stops_a_frictionless_block_after_v0_m_over_c() {
+    // The force −C·v decelerates a rock of mass m at rate C/m: it glides v0·m/C, so a block of half the mass stops
+    // in half the distance.
+    let terrain = incline(0.0, material(0.0, 0.0, 0.0));
+    let c_kg_s = 2000.0;
+    let params = SimParams {
+        effects: talus::sim::Effects { vegetation_drag_kg_s: Some(c_kg_s), ..Default::default() },
+        ..Default::default()
+    };
+    let v0 = 4.0;
+    for mass_kg in [1000.0, 500.0] {
+        let r = rock(ShapeKind::FlatBox, mass_kg);
+        let start = resting_on_incline(&r, 0.0, 60.0, v0);
+        let out = simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut ());
+        assert_eq!(out.stop_reason, StopReason::Stopped);
+        let moved = (out.final_state.position_m - start.position_m).norm();
+        assert_relative_eq!(moved, v0 * r.mass_kg / c_kg_s, max_relative = 0.03);
+    }
+}
+
+#[test]
 fn block_on_an_incline_below_its_static_friction_angle_stays_put() {
     let terrain = incline(25.0, material(0.0, 30.0, 20.0));
     let r = rock(ShapeKind::FlatBox, 1000.0);

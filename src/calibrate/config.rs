@@ -17,11 +17,12 @@
 //!
 //! [effects]
 //! candidates = ["speed_restitution", "angle_restitution", "mass_restitution", "roughness",
-//!               "rolling_resistance", "soft_drag", "zone"]
+//!               "rolling_resistance", "soft_drag", "vegetation_drag", "zone"]
 //! min_improvement = 0.05    # relative cut of the cross-validated run-out MAE to keep an effect
 //! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
 //! ```
 
+use super::effects::{by_name, effects_for, EffectKind};
 use crate::error::{Error, Result};
 use crate::lumped2d::Options2d;
 use crate::scenario::{MaterialsBy, ZoneSpec};
@@ -183,6 +184,10 @@ pub enum Objective {
 pub struct EffectsConfig {
     /// Effects the loop may add (default: all that the model supports).
     pub candidates: Vec<String>,
+    /// Effects the user knows are there, switched on from the start as part of the model the baseline calibrates:
+    /// effect name → its parameter, fixed (a number) or free (`[min, max]` or `{ min, max, start }`) (default:
+    /// none). Only effects with a parameter, not `zone`.
+    pub declared: BTreeMap<String, ParamSetting>,
     /// Smallest relative cut of the cross-validated run-out MAE that counts as an improvement (default 0.05).
     pub min_improvement: f64,
     /// Largest one-sided paired permutation p-value for keeping an effect (default 0.05).
@@ -208,6 +213,7 @@ impl Default for EffectsConfig {
     fn default() -> Self {
         EffectsConfig {
             candidates: Vec::new(),
+            declared: BTreeMap::new(),
             min_improvement: 0.05,
             alpha: 0.05,
             propose_alpha: 0.05,
@@ -427,25 +433,11 @@ impl CalibrationConfig {
         }
         for (m, params) in &self.materials {
             for (p, s) in params {
-                let field = f(&format!("materials.{m}.{p}"));
-                let values: Vec<f64> = match s {
-                    ParamSetting::Fixed(v) => vec![*v],
-                    _ => {
-                        let (a, b, st) = s.bounds().unwrap_or_default();
-                        if a.partial_cmp(&b) != Some(std::cmp::Ordering::Less) || st < a || st > b {
-                            return Err(Error::invalid(
-                                field,
-                                format!("bounds [{a}, {b}] with start {st} are not ordered"),
-                                "give min < max and a start between them",
-                            ));
-                        }
-                        vec![a, b, st]
-                    }
-                };
-                if values.iter().any(|v| !v.is_finite()) {
-                    return Err(Error::invalid(field, "is not a finite number", "give plain numbers"));
-                }
+                check_setting(&f(&format!("materials.{m}.{p}")), s)?;
             }
+        }
+        for (name, s) in &e.declared {
+            check_setting(&f(&format!("effects.declared.{name}")), s)?;
         }
         Ok(())
     }
@@ -493,6 +485,69 @@ impl CalibrationConfig {
         }
         Ok(())
     }
+
+    /// Checks that the effect names under `[effects]` (candidates and declared) exist for `model`, and that each
+    /// declared effect has a parameter and bounds inside the effect's own.
+    pub fn check_effects(&self, model: ModelKind, source: &str) -> Result<()> {
+        let names = || effects_for(model).iter().map(|d| d.name).collect::<Vec<_>>().join(", ");
+        for c in &self.effects.candidates {
+            if by_name(model, c).is_none() {
+                return Err(Error::invalid(
+                    format!("{source}: effects.candidates"),
+                    format!("'{c}' is not a {} effect", model.as_str()),
+                    format!("use some of: {}", names()),
+                ));
+            }
+        }
+        for (name, s) in &self.effects.declared {
+            let field = format!("{source}: effects.declared.{name}");
+            let Some(def) = by_name(model, name) else {
+                return Err(Error::invalid(
+                    field,
+                    format!("'{name}' is not a {} effect", model.as_str()),
+                    format!("use one of: {}", names()),
+                ));
+            };
+            if def.param.is_none() || def.kind == EffectKind::Zone {
+                return Err(Error::invalid(
+                    field,
+                    format!("'{name}' has no parameter to declare"),
+                    "declare an effect with a parameter; zones are found by the loop or given as [[terrain.zones]]",
+                ));
+            }
+            let (a, b) = s.bounds().map(|(a, b, _)| (a, b)).unwrap_or((s.start(), s.start()));
+            if a < def.bounds.0 || b > def.bounds.1 {
+                return Err(Error::invalid(
+                    field,
+                    format!("[{a}, {b}] leaves the effect's range [{}, {}]", def.bounds.0, def.bounds.1),
+                    "narrow the bounds",
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Checks that a parameter setting is finite and, if free, has ordered bounds around its start.
+fn check_setting(field: &str, s: &ParamSetting) -> Result<()> {
+    let values: Vec<f64> = match s {
+        ParamSetting::Fixed(v) => vec![*v],
+        _ => {
+            let (a, b, st) = s.bounds().unwrap_or_default();
+            if a.partial_cmp(&b) != Some(std::cmp::Ordering::Less) || st < a || st > b {
+                return Err(Error::invalid(
+                    field,
+                    format!("bounds [{a}, {b}] with start {st} are not ordered"),
+                    "give min < max and a start between them",
+                ));
+            }
+            vec![a, b, st]
+        }
+    };
+    if values.iter().any(|v| !v.is_finite()) {
+        return Err(Error::invalid(field, "is not a finite number", "give plain numbers"));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

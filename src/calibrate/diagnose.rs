@@ -56,7 +56,7 @@ pub fn residuals(model: &dyn Model, sims: &[RunSims]) -> (Vec<f64>, Vec<f64>) {
     (runout, offset)
 }
 
-/// The covariates of the runs of `sims`: block (mass, size, elongation, flatness), release (height above ground,
+/// The covariates of the runs of `sims`: block (mass, size, elongation, flatness, area per mass), release (height above ground,
 /// initial speed, position), and the medians over repeats of path quantities (drop height to the simulated rest
 /// point, mean slope, share of gentle ground, slope at rest, impact speeds and angles, share of each material).
 pub fn covariates(model: &dyn Model, sims: &[RunSims]) -> Covariates {
@@ -72,6 +72,7 @@ pub fn covariates(model: &dyn Model, sims: &[RunSims]) -> Covariates {
     add("size_m", &|s| runs[s.run].size_nominal_m());
     add("elongation", &|s| runs[s.run].elongation());
     add("flatness", &|s| runs[s.run].flatness());
+    add("area_per_mass_m2_kg", &|s| runs[s.run].area_per_mass_m2_kg());
     add("release_height_m", &|s| model.release_height_m(&runs[s.run]));
     add("drop_height_m", &|s| {
         runs[s.run].release_m[2] - median(&s.sims.iter().map(|x| x.rest_m[2]).collect::<Vec<_>>())

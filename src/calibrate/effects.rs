@@ -24,6 +24,8 @@ pub enum EffectKind {
     RollingResistance,
     /// Drag in soft ground on one material.
     SoftDrag,
+    /// A linear drag force from low vegetation (light rocks slow most).
+    VegetationDrag,
     /// A zone of the terrain that behaves differently from its declared material.
     Zone,
     /// The CRSP tangential rule with spin (2DLM).
@@ -130,6 +132,16 @@ const DRAG_3D: EffectDef = EffectDef {
     formula: "in contact with the material, velocity and spin decay as exp(-c t) (a linear stand-in for RAMMS's scarring drag, Lu et al. 2019, physics.md §2)",
 };
 
+const VEGETATION_DRAG_3D: EffectDef = EffectDef {
+    kind: EffectKind::VegetationDrag,
+    name: "vegetation_drag",
+    param: Some("c_kg_s"),
+    grid: &[3.0, 8.0, 20.0, 50.0],
+    bounds: (0.0, 500.0),
+    signature: &["mass_kg", "size_m", "flatness", "area_per_mass_m2_kg"],
+    formula: "in contact with the ground a force -c v: velocity and spin decay as exp(-(c/m) t), light rocks slow most (RAMMS's forest drag F_d = -c_d v, Leine et al. 2014, physics.md §2; applied in contact for vegetation lower than the rock: ours)",
+};
+
 const ZONE: EffectDef = EffectDef {
     kind: EffectKind::Zone,
     name: "zone",
@@ -163,7 +175,7 @@ const CRSP_2D: EffectDef = EffectDef {
 
 /// The effects a model supports, in the order the loop considers them.
 pub fn effects_for(model: ModelKind) -> &'static [EffectDef] {
-    const D3: [EffectDef; 7] = [SPEED_3D, ANGLE_3D, MASS_3D, ROUGH_3D, ROLL_3D, DRAG_3D, ZONE];
+    const D3: [EffectDef; 8] = [SPEED_3D, ANGLE_3D, MASS_3D, ROUGH_3D, ROLL_3D, DRAG_3D, VEGETATION_DRAG_3D, ZONE];
     const D2: [EffectDef; 4] = [SPEED_2D, MASS_2D, CRSP_2D, ZONE];
     match model {
         ModelKind::Rigid3d => &D3,

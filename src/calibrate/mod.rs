@@ -64,14 +64,27 @@ pub fn open_model(
         ModelKind::Lumped2d => Box::new(model2d::Model2d::new(runs, groups, terrain_file, cfg)?),
     };
     cfg.check_materials(kind, model.materials(), source)?;
+    cfg.check_effects(kind, source)?;
     Ok(model)
 }
 
-/// The starting candidate (every material parameter at its start or fixed value) and the free parameters.
+/// The starting candidate (every material parameter at its start or fixed value, and the declared effects with
+/// theirs) and the free parameters.
 pub fn base_candidate(model: &dyn Model, cfg: &CalibrationConfig) -> (Candidate, Vec<FreeParam>) {
     let kind = model.kind();
     let mut params = Params::default();
     let mut free = Vec::new();
+    let mut effects = Vec::new();
+    for (name, s) in &cfg.effects.declared {
+        let Some(def) = effects::by_name(kind, name) else { continue };
+        let Some(param) = def.param else { continue };
+        let key = format!("{name}.{param}");
+        params.set(key.clone(), s.start());
+        if let Some((min, max, _)) = s.bounds() {
+            free.push(FreeParam { name: key, min, max });
+        }
+        effects.push(params::EffectSpec { kind: def.kind, label: name.clone(), material: None, region: None });
+    }
     for m in model.materials() {
         for p in kind.material_parameters() {
             let s = cfg.setting(kind, m, p);
@@ -82,7 +95,7 @@ pub fn base_candidate(model: &dyn Model, cfg: &CalibrationConfig) -> (Candidate,
             }
         }
     }
-    (Candidate { params, effects: Vec::new() }, free)
+    (Candidate { params, effects }, free)
 }
 
 /// A calibration's results, with the simulations behind the reported metrics.

@@ -267,6 +267,7 @@ impl Model for Model3d {
                 }
                 EffectKind::Roughness => fx.roughness_m = Some(value(&e.label, "rough_m")?),
                 EffectKind::RollingResistance => fx.rolling_resistance = Some(value(&e.label, "mu_r")?),
+                EffectKind::VegetationDrag => fx.vegetation_drag_kg_s = Some(value(&e.label, "c_kg_s")?),
                 EffectKind::SoftDrag => {
                     fx.soft_drag_per_s = Some(value(&e.label, "rate_per_s")?);
                     fx.soft_materials = e.material.iter().cloned().collect();

@@ -50,6 +50,11 @@ impl FieldRun {
         self.size_m[1] / self.size_m[2]
     }
 
+    /// Area of the block's largest face per unit mass, a·b/m of the sorted sizes, m²/kg.
+    pub fn area_per_mass_m2_kg(&self) -> f64 {
+        self.size_m[0] * self.size_m[1] / self.mass_kg
+    }
+
     /// Nominal size: the geometric mean of the three sizes, m.
     pub fn size_nominal_m(&self) -> f64 {
         (self.size_m[0] * self.size_m[1] * self.size_m[2]).cbrt()

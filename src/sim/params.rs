@@ -138,6 +138,11 @@ pub struct Effects {
     pub soft_drag_per_s: Option<f64>,
     /// Materials where `soft_drag_per_s` acts (default: all).
     pub soft_materials: Vec<String>,
+    /// Linear drag force from low vegetation, F = −c·v while the rock touches the ground, so that velocity and spin
+    /// decay as exp(−(c/m)·t) and light rocks slow most (RAMMS's forest drag F_d = −c_d·v, Leine et al. 2014,
+    /// physics.md §2, applied in contact: ours, for grass or shrubs lower than the rock); c this value, kg/s. Added
+    /// to the soft-ground drag.
+    pub vegetation_drag_kg_s: Option<f64>,
 }
 
 impl Effects {
@@ -149,6 +154,7 @@ impl Effects {
             && self.roughness_m.is_none()
             && self.rolling_resistance.is_none()
             && self.soft_drag_per_s.is_none()
+            && self.vegetation_drag_kg_s.is_none()
     }
 
     /// Checks ranges; `prefix` is prepended to field names.
@@ -167,7 +173,13 @@ impl Effects {
         check("mass_reference_kg", self.mass_reference_kg, 1e-3, 1e9)?;
         check("roughness_m", self.roughness_m, 0.0, 100.0)?;
         check("rolling_resistance", self.rolling_resistance, 0.0, 5.0)?;
-        check("soft_drag_per_s", self.soft_drag_per_s, 0.0, 1000.0)
+        check("soft_drag_per_s", self.soft_drag_per_s, 0.0, 1000.0)?;
+        check("vegetation_drag_kg_s", self.vegetation_drag_kg_s, 0.0, 1e6)
+    }
+
+    /// The drag rate of `vegetation_drag_kg_s` on a rock of `mass_kg`, 1/s (0 when off).
+    pub fn vegetation_drag_per_s(&self, mass_kg: f64) -> f64 {
+        self.vegetation_drag_kg_s.map_or(0.0, |c| c / mass_kg)
     }
 
     /// The restitution coefficient after the restitution effects, for a contact approaching at `approach_mps`

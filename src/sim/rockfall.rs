@@ -197,6 +197,8 @@ struct Run<'a> {
     barrier_met: Vec<bool>,
     /// Soft-ground drag rate of each material, 1/s: its own, or the `soft_drag_per_s` effect's where that acts.
     drag_per_s: Vec<f64>,
+    /// Drag rate of the `vegetation_drag_kg_s` effect on any ground, 1/s.
+    vegetation_drag_per_s: f64,
     contacts: Vec<Contact>,
     previous: Vec<Contact>,
     scratch: Scratch,
@@ -263,6 +265,7 @@ impl<'a> Run<'a> {
                     }
                 })
                 .collect(),
+            vegetation_drag_per_s: params.effects.vegetation_drag_per_s(rock.mass_kg),
             contacts: Vec::with_capacity(16),
             previous: Vec::with_capacity(16),
             scratch: Scratch::default(),
@@ -508,8 +511,8 @@ impl<'a> Run<'a> {
         in_contact
     }
 
-    /// Rolling resistance (when on) and soft-ground drag (the largest rate among the touched materials) on a rock in
-    /// contact over a step of `h`.
+    /// Rolling resistance (when on) and drag (the largest soft-ground rate among the touched materials plus the
+    /// vegetation drag) on a rock in contact over a step of `h`.
     fn brake(&self, vel: &mut Velocities, h: f64) {
         let effects = &self.params.effects;
         if let Some(mu_r) = effects.rolling_resistance {
@@ -528,7 +531,8 @@ impl<'a> Run<'a> {
             .contacts
             .iter()
             .map(|k| self.drag_per_s[self.terrain.triangle_material[k.triangle as usize] as usize])
-            .fold(0.0, f64::max);
+            .fold(0.0, f64::max)
+            + self.vegetation_drag_per_s;
         if c > 0.0 {
             let f = (-c * h).exp();
             vel.linear_mps *= f;
