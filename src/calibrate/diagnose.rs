@@ -56,9 +56,10 @@ pub fn residuals(model: &dyn Model, sims: &[RunSims]) -> (Vec<f64>, Vec<f64>) {
     (runout, offset)
 }
 
-/// The covariates of the runs of `sims`: block (mass, size, elongation, flatness, area per mass), release (height above ground,
-/// initial speed, position), and the medians over repeats of path quantities (drop height to the simulated rest
-/// point, mean slope, share of gentle ground, slope at rest, impact speeds and angles, share of each material).
+/// The covariates of the runs of `sims`: block (mass, size, elongation, flatness, area per mass), release (height
+/// above ground, initial speed, position), and the medians over repeats of path quantities (drop height to the
+/// simulated rest point, mean slope, share of gentle ground, slope at rest, impact speeds and angles, share of
+/// each material).
 pub fn covariates(model: &dyn Model, sims: &[RunSims]) -> Covariates {
     let runs = model.runs();
     let profile = model.kind() == super::config::ModelKind::Lumped2d;
