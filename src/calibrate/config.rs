@@ -22,7 +22,7 @@
 //! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
 //! ```
 
-use super::effects::{by_name, effects_for, EffectKind};
+use super::effects::{by_name, effects_for};
 use crate::error::{Error, Result};
 use crate::lumped2d::Options2d;
 use crate::scenario::{MaterialsBy, ZoneSpec};
@@ -508,7 +508,7 @@ impl CalibrationConfig {
                     format!("use one of: {}", names()),
                 ));
             };
-            if def.param.is_none() || def.kind == EffectKind::Zone {
+            if def.param.is_none() {
                 return Err(Error::invalid(
                     field,
                     format!("'{name}' has no parameter to declare"),
