@@ -1,43 +1,62 @@
 //! The Tschamut campaign simulated under parameters you give, per block: observed and simulated mean run-out, bias,
-//! run-out MAE and coverage (20 repeats per run, all 80 runs). For looking at what a parameter or an effect does to
+//! run-out MAE, W1 and coverage (20 repeats per run, all 80 runs). For looking at what a parameter or an effect does to
 //! each block without a calibration.
 //!
-//! Run: cargo run --release --example explore_tschamut -- CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S]
-//! e.g. `-- 0.30 0.06 35.4 20.3` (a W1 k-fold fold's baseline) and `-- 0.30 0.06 35.4 14.0 10` (with vegetation drag)
+//! Run: cargo run --release --example explore_tschamut -- CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
+//! e.g. `-- 0.30 0.06 35.4 20.3` (a W1 k-fold fold's baseline), `-- 0.30 0.06 35.4 14.0 10` (with vegetation drag)
+//! and `-- 0.18 0.13 42 17 5.6 4` (and a dynamic friction spread of 4° between rocks)
+use std::collections::BTreeMap;
 use std::path::Path;
 use talus::calibrate::config::CalibrationConfig;
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::params::Candidate;
+use talus::calibrate::stats::mean;
 use talus::calibrate::synthetic::material_params_3d;
 use talus::calibrate::{open_model, ModelKind};
 
 fn main() {
     let args: Vec<f64> = std::env::args().skip(1).map(|a| a.parse().expect("numbers")).collect();
-    if !(4..=5).contains(&args.len()) {
-        eprintln!("usage: explore_tschamut CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S]");
+    if !(4..=6).contains(&args.len()) {
+        eprintln!(
+            "usage: explore_tschamut CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]"
+        );
         std::process::exit(2);
     }
     let dir = Path::new("meshes/tschamut2014");
     let mut cfg = CalibrationConfig::default();
-    cfg.simulation.effects.vegetation_drag_kg_s = args.get(4).copied();
+    cfg.simulation.effects.vegetation_drag_kg_s = args.get(4).copied().filter(|&c| c > 0.0);
     let model = open_model(dir, &dir.join("terrain_proxy.asc"), ModelKind::Rigid3d, &cfg, "explore_tschamut").unwrap();
-    let c =
+    let mut c =
         Candidate { params: material_params_3d("default", [args[0], args[1], args[2], args[3]]), ..Default::default() };
+    c.params.set("default.dynamic_friction_sd_deg", args.get(5).copied().unwrap_or(0.0));
     let all: Vec<usize> = (0..model.runs().len()).collect();
     let sims = evaluate(model.as_ref(), &c, &all, 20, 1, 0).unwrap();
-    println!("block  runs  observed m  simulated m  bias m  MAE m  floor m  coverage");
+    println!(
+        "block  runs  observed m  simulated m  bias m  MAE m  floor m  W1 m  coverage  90% width m  obs sd in group m"
+    );
     for block in ["1", "2", "4"] {
         let s: Vec<_> = sims.iter().filter(|s| model.runs()[s.run].block_id == block).cloned().collect();
         let m = metrics(model.runs(), &s);
+        // The mean width of each run's simulated 5-95 % interval, and the observed run-outs' sd within each
+        // release group (pooled): the two should match for coverage near 0.9.
+        let width = mean(&s.iter().map(|r| r.runout_quantile(0.95) - r.runout_quantile(0.05)).collect::<Vec<_>>());
+        let mut groups: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
+        for r in &s {
+            groups.entry(model.runs()[r.run].group).or_default().push(model.runs()[r.run].runout_m);
+        }
+        let within: Vec<f64> = groups.values().flat_map(|g| g.iter().map(move |x| x - mean(g))).collect();
+        let n_groups = groups.len() as f64;
+        let sd = (within.iter().map(|d| d * d).sum::<f64>() / (within.len() as f64 - n_groups).max(1.0)).sqrt();
         println!(
-            "{block:>5}  {:>4}  {:>10.1}  {:>11.1}  {:>+6.1}  {:>5.1}  {:>7.1}  {:>8.2}",
+            "{block:>5}  {:>4}  {:>10.1}  {:>11.1}  {:>+6.1}  {:>5.1}  {:>7.1}  {:>4.1}  {:>8.2}  {width:>11.1}  {sd:>17.1}",
             m.runs,
             m.observed_mean_m,
             m.simulated_mean_m,
             m.runout_bias_m,
             m.runout_mae_m,
             m.scatter_floor_mae_m,
+            m.runout_w1_m,
             m.coverage_90
         );
     }

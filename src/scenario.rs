@@ -168,6 +168,9 @@ pub struct MaterialSpec {
     pub static_friction_deg: Option<f64>,
     /// Dynamic friction angle, degrees.
     pub dynamic_friction_deg: Option<f64>,
+    /// Spread of the dynamic friction angle between rocks, degrees (default 0: none; see
+    /// [`Material::dynamic_friction_sd_deg`]).
+    pub dynamic_friction_sd_deg: Option<f64>,
     /// Soft-ground drag rate while in contact, 1/s (default 0: none).
     pub drag_per_s: Option<f64>,
 }
@@ -538,6 +541,7 @@ impl MaterialSpec {
                     cr: TruncNormal::three_sigma(mean, self.cr_sd.unwrap_or(0.0), 0.0, 1.0),
                     static_friction_deg: need(self.static_friction_deg, "static_friction_deg")?,
                     dynamic_friction_deg: need(self.dynamic_friction_deg, "dynamic_friction_deg")?,
+                    dynamic_friction_sd_deg: 0.0,
                     drag_per_s: 0.0,
                 }
             }
@@ -551,6 +555,9 @@ impl MaterialSpec {
         }
         if let Some(v) = self.dynamic_friction_deg {
             m.dynamic_friction_deg = v;
+        }
+        if let Some(v) = self.dynamic_friction_sd_deg {
+            m.dynamic_friction_sd_deg = v;
         }
         if let Some(v) = self.cr_min {
             m.cr.min = v;

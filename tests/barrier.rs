@@ -17,6 +17,7 @@ fn slope() -> Terrain {
         cr: TruncNormal::fixed(0.35),
         static_friction_deg: 30.0,
         dynamic_friction_deg: 22.0,
+        dynamic_friction_sd_deg: 0.0,
         drag_per_s: 0.0,
     };
     // 35° plane falling towards +x.

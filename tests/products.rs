@@ -271,6 +271,16 @@ fn new_scenario_tables_are_checked_with_their_field() {
         let err = ScenarioFile::read(&p).unwrap().resolve(&p).unwrap_err().to_string();
         assert!(err.contains(want) && err.contains("how to fix"), "{extra}: {err}");
     }
+    // A material's dynamic friction spread: read, and checked.
+    let p = dir.path().join("s.toml");
+    let with_spread = |sd: &str| {
+        base.replace("preset = \"face_all\"\n", &format!("preset = \"face_all\"\ndynamic_friction_sd_deg = {sd}\n"))
+    };
+    std::fs::write(&p, with_spread("3.0")).unwrap();
+    assert_eq!(ScenarioFile::read(&p).unwrap().resolve(&p).unwrap().materials[0].dynamic_friction_sd_deg, 3.0);
+    std::fs::write(&p, with_spread("-2.0")).unwrap();
+    let err = ScenarioFile::read(&p).unwrap().resolve(&p).unwrap_err().to_string();
+    assert!(err.contains("materials.default.dynamic_friction_sd_deg") && err.contains("-2"), "{err}");
 }
 
 #[test]

@@ -321,6 +321,7 @@ mod tests {
             cr: TruncNormal::fixed(0.3),
             static_friction_deg: 40.0,
             dynamic_friction_deg: 30.0,
+            dynamic_friction_sd_deg: 0.0,
             drag_per_s: 0.0,
         };
         // Falls towards +x.

@@ -43,9 +43,10 @@ pub struct BackAnalysisRow {
     pub by_block: BTreeMap<String, Spread>,
 }
 
-/// Is this a parameter the per-run back-analysis fits (locations, not spreads)?
+/// Is this a parameter the per-run back-analysis fits (locations, not spreads between rocks such as `cr_sd` or
+/// `dynamic_friction_sd_deg`; the slope roughness `roughness_sd_deg` moves a run's median, so it counts)?
 pub fn is_location(name: &str) -> bool {
-    !name.ends_with("_sd") || name.ends_with("roughness_sd_deg")
+    !(name.ends_with("_sd") || name.ends_with("friction_sd_deg"))
 }
 
 /// Back-analyses every free location parameter of `base` on runs `which`.
@@ -104,4 +105,21 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
         });
     }
     rows
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn spreads_between_rocks_are_not_back_analysed_per_run() {
+        for (name, location) in [
+            ("default.cr_mean", true),
+            ("default.dynamic_friction_deg", true),
+            ("default.roughness_sd_deg", true),
+            ("default.cr_sd", false),
+            ("default.rn_sd", false),
+            ("default.dynamic_friction_sd_deg", false),
+        ] {
+            assert_eq!(super::is_location(name), location, "{name}");
+        }
+    }
 }

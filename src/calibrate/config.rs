@@ -14,6 +14,7 @@
 //! cr_sd = 0.05
 //! static_friction_deg = [10.0, 60.0]
 //! dynamic_friction_deg = { min = 5.0, max = 55.0, start = 28.0 }
+//! dynamic_friction_sd_deg = 0.0   # spread between rocks (default 0); [0, 8] frees it
 //!
 //! [effects]
 //! candidates = ["speed_restitution", "angle_restitution", "mass_restitution", "roughness",
@@ -69,7 +70,9 @@ impl ModelKind {
     /// The calibrated parameters of one material, in report order.
     pub fn material_parameters(self) -> &'static [&'static str] {
         match self {
-            ModelKind::Rigid3d => &["cr_mean", "cr_sd", "static_friction_deg", "dynamic_friction_deg"],
+            ModelKind::Rigid3d => {
+                &["cr_mean", "cr_sd", "static_friction_deg", "dynamic_friction_deg", "dynamic_friction_sd_deg"]
+            }
             ModelKind::Lumped2d => &["rn_mean", "rn_sd", "rt_mean", "rt_sd", "friction_angle_deg", "roughness_sd_deg"],
         }
     }
@@ -83,6 +86,7 @@ impl ModelKind {
             (ModelKind::Rigid3d, "cr_sd") => ParamSetting::Fixed(0.05),
             (ModelKind::Rigid3d, "static_friction_deg") => free(10.0, 60.0, 35.0),
             (ModelKind::Rigid3d, "dynamic_friction_deg") => free(5.0, 55.0, 28.0),
+            (ModelKind::Rigid3d, "dynamic_friction_sd_deg") => ParamSetting::Fixed(0.0),
             (ModelKind::Lumped2d, "rn_mean") => free(0.05, 0.8, 0.3),
             (ModelKind::Lumped2d, "rn_sd") => ParamSetting::Fixed(0.05),
             (ModelKind::Lumped2d, "rt_mean") => free(0.3, 0.99, 0.8),
@@ -98,7 +102,7 @@ impl ModelKind {
         match name {
             "cr_mean" | "cr_sd" | "rn_mean" | "rn_sd" | "rt_mean" | "rt_sd" => (0.0, 1.0),
             "static_friction_deg" | "dynamic_friction_deg" | "friction_angle_deg" => (0.0, 89.0),
-            "roughness_sd_deg" => (0.0, 30.0),
+            "roughness_sd_deg" | "dynamic_friction_sd_deg" => (0.0, 30.0),
             _ => (f64::NEG_INFINITY, f64::INFINITY),
         }
     }

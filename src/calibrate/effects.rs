@@ -59,9 +59,32 @@ pub const MOBILITY_GRID: [f64; 5] = [1.0 / 1.44, 1.0 / 1.2, 1.0, 1.2, 1.44];
 /// the mobility factor (ours): such an effect changes the meaning of Cr, which may have to move far.
 pub const CR_SCALE_GRID: [f64; 5] = [0.5, 0.7, 1.0, 1.4, 2.0];
 
-/// True for the effects that modify the restitution coefficient.
-pub fn is_restitution(kind: EffectKind) -> bool {
-    matches!(kind, EffectKind::SpeedRestitution | EffectKind::AngleRestitution | EffectKind::MassRestitution)
+/// How the arm of an effect re-centres the model in the loop's screening (ours).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Recentring {
+    /// The mobility factor over [`MOBILITY_GRID`] (Cr, both friction angles).
+    Mobility,
+    /// Every Cr times [`CR_SCALE_GRID`]: a restitution effect (speed, angle, mass) changes the meaning of Cr,
+    /// which may have to move far.
+    CrScale,
+    /// tan of every dynamic friction angle divided by [`MOBILITY_GRID`]: a resistance in contact (rolling
+    /// resistance, soft-ground or vegetation drag) does the work part of the sliding friction did, and leaves the
+    /// bounce (Cr) and the rest (static friction) as fitted. With the mobility factor instead, the Tschamut
+    /// screening missed the fit's valley (dynamic friction 20 → 16°, static and Cr unchanged).
+    DynamicFriction,
+}
+
+/// The re-centring of `kind`'s arm.
+pub fn recentring(kind: EffectKind) -> Recentring {
+    match kind {
+        EffectKind::SpeedRestitution | EffectKind::AngleRestitution | EffectKind::MassRestitution => {
+            Recentring::CrScale
+        }
+        EffectKind::RollingResistance | EffectKind::SoftDrag | EffectKind::VegetationDrag => {
+            Recentring::DynamicFriction
+        }
+        EffectKind::Roughness | EffectKind::Zone | EffectKind::CrspRotation => Recentring::Mobility,
+    }
 }
 
 /// Zone mobility factors tried for a new zone, relative to the material it replaces (ours).

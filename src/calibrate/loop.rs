@@ -9,12 +9,13 @@
 //!   1.44} ([`super::params::apply_mobility_3d`]);
 //! - an *effect arm*: the effect's parameter on its grid × the same mobility factors (so the effect is not
 //!   credited for a mere re-centring), or × Cr factors {0.5, 0.7, 1, 1.4, 2} for a restitution effect, which
-//!   changes what Cr means; for a zone, the candidate zones are derived from the training folds only and the
-//!   zone material's mobility is stepped over {0.2, 0.4, 0.7, 1.5} (in 3DRB also, at mobility 1, its
-//!   soft-ground drag over {3, 10, 30} s⁻¹). A restitution effect is switched on *centred*:
-//!   every material's Cr is divided by the effect's factor at the current model's typical impact (median impact
-//!   speed, median impact angle; the mass effect is neutral at the median mass), so that the effect changes how
-//!   restitution varies, not its typical level (ours).
+//!   changes what Cr means, or × the mobility factors on the dynamic friction alone for a resistance in contact
+//!   (rolling resistance, soft-ground and vegetation drag; [`super::effects::Recentring`]); for a zone, the
+//!   candidate zones are derived from the training folds only and the zone material's mobility is stepped over
+//!   {0.2, 0.4, 0.7, 1.5} (in 3DRB also, at mobility 1, its soft-ground drag over {3, 10, 30} s⁻¹). A
+//!   restitution effect is switched on *centred*: every material's Cr is divided by the effect's factor at the
+//!   current model's typical impact (median impact speed, median impact angle; the mass effect is neutral at the
+//!   median mass), so that the effect changes how restitution varies, not its typical level (ours).
 //!
 //! In each fold, each arm picks the setting with the best objective on the other folds' runs, and the fold's own
 //! runs are predicted with it. That gives every calibration run an out-of-fold error under each arm: a cheap
@@ -35,8 +36,8 @@
 use super::config::ModelKind;
 use super::diagnose::{diagnose, Diagnostic};
 use super::effects::{
-    definition, effects_for, is_restitution, EffectDef, EffectKind, CR_SCALE_GRID, MOBILITY_GRID, ZONE_DRAG_GRID,
-    ZONE_MOBILITY_GRID,
+    definition, effects_for, recentring, EffectDef, EffectKind, Recentring, CR_SCALE_GRID, MOBILITY_GRID,
+    ZONE_DRAG_GRID, ZONE_MOBILITY_GRID,
 };
 use super::fit::{fit, Context};
 use super::metrics::crps;
@@ -199,16 +200,16 @@ pub fn effects_loop(
                 } else {
                     prop.def.grid.iter().map(|v| Some(*v)).collect()
                 };
-                let restitution = is_restitution(prop.def.kind);
-                let axis: &[f64] = if restitution { &CR_SCALE_GRID } else { &MOBILITY_GRID };
+                let how = recentring(prop.def.kind);
+                let axis: &[f64] = if how == Recentring::CrScale { &CR_SCALE_GRID } else { &MOBILITY_GRID };
                 for v in values {
                     for &m in axis {
                         let mut c =
                             with_effect(model, &current, prop.def, &prop.label, prop.material.clone(), v, &centre);
-                        if restitution {
-                            scale_cr(&mut c, m);
-                        } else {
-                            c.params.set(MOBILITY, m);
+                        match how {
+                            Recentring::CrScale => scale_cr(&mut c, m),
+                            Recentring::DynamicFriction => scale_dynamic_friction(&mut c, m),
+                            Recentring::Mobility => c.params.set(MOBILITY, m),
                         }
                         arm.settings.push(ctx.sims(&c, cal, cfg.search_repeats)?);
                         arm.cands.push(c);
@@ -367,6 +368,16 @@ fn scale_cr(c: &mut Candidate, f: f64) {
     for n in names {
         let v = c.params.get_or(&n, 0.0);
         c.params.set(n, (v * f).min(1.0));
+    }
+}
+
+/// Divides tan of every material's (and zone's) dynamic friction angle by `f` (3DRB; f > 1 is more slippery, as
+/// with the mobility factor).
+fn scale_dynamic_friction(c: &mut Candidate, f: f64) {
+    let names: Vec<String> = c.params.0.keys().filter(|k| k.ends_with(".dynamic_friction_deg")).cloned().collect();
+    for n in names {
+        let v = c.params.get_or(&n, 0.0);
+        c.params.set(n, (v.to_radians().tan() / f).atan().to_degrees());
     }
 }
 
@@ -623,6 +634,7 @@ pub fn with_zone(
                 ("cr_sd", sd),
                 ("static_friction_deg", s),
                 ("dynamic_friction_deg", d),
+                ("dynamic_friction_sd_deg", g("dynamic_friction_sd_deg")),
                 ("drag_per_s", drag_per_s),
             ] {
                 c.params.set(format!("{label}.{n}"), v);
@@ -775,4 +787,22 @@ fn sims_reusing(
         out[j].sims[r] = s;
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_resistance_effect_recentres_only_the_dynamic_friction() {
+        let mut c = Candidate::default();
+        for (k, v) in [("a.cr_mean", 0.3), ("a.static_friction_deg", 40.0), ("a.dynamic_friction_deg", 20.0)] {
+            c.params.set(k, v);
+        }
+        assert_eq!(recentring(EffectKind::VegetationDrag), Recentring::DynamicFriction);
+        scale_dynamic_friction(&mut c, 1.2);
+        let d = c.params.get("a.dynamic_friction_deg").unwrap();
+        assert!((d.to_radians().tan() - 20f64.to_radians().tan() / 1.2).abs() < 1e-12, "{d}");
+        assert_eq!((c.params.get("a.cr_mean"), c.params.get("a.static_friction_deg")), (Some(0.3), Some(40.0)));
+    }
 }

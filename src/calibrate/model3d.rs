@@ -67,6 +67,7 @@ impl Model3d {
                 cr: TruncNormal::fixed(0.3),
                 static_friction_deg: 35.0,
                 dynamic_friction_deg: 30.0,
+                dynamic_friction_sd_deg: 0.0,
                 drag_per_s: 0.0,
             })
             .collect();
@@ -159,6 +160,7 @@ impl Model3d {
             cr: TruncNormal::three_sigma(cr, sd, 0.0, 1.0),
             static_friction_deg: s.clamp(0.0, 89.0),
             dynamic_friction_deg: d.clamp(0.0, 89.0),
+            dynamic_friction_sd_deg: params.get_or(&format!("{prefix}.dynamic_friction_sd_deg"), 0.0),
             drag_per_s: params.get_or(&format!("{prefix}.drag_per_s"), 0.0),
         })
     }

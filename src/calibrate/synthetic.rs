@@ -217,6 +217,7 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
         cr: TruncNormal::three_sigma(v[0], v[1], 0.0, 1.0),
         static_friction_deg: v[2],
         dynamic_friction_deg: v[3],
+        dynamic_friction_sd_deg: 0.0,
         drag_per_s: 0.0,
     };
     let n = (160.0 / spec.cell_m).round() as usize;

@@ -193,6 +193,9 @@ struct Run<'a> {
     s: RigidState,
     t: f64,
     cr: Vec<f64>,
+    /// tan of the static and dynamic friction angles of each material for this rock (the terrain's, or drawn
+    /// where a material has a dynamic friction spread).
+    friction: Vec<(f64, f64)>,
     touching: Vec<bool>,
     barrier_met: Vec<bool>,
     /// Soft-ground drag rate of each material, 1/s: its own, or the `soft_drag_per_s` effect's where that acts.
@@ -228,6 +231,8 @@ impl<'a> Run<'a> {
         rng: &'a mut Rng,
     ) -> Self {
         let cr = terrain.materials.iter().map(|m| m.cr.sample(rng)).collect();
+        let friction =
+            terrain.materials.iter().zip(&terrain.friction).map(|(m, &f)| m.friction_for_rock(f, rng)).collect();
         let settings = SolverSettings {
             bounce_threshold_mps: params.bounce_threshold_mps,
             max_iterations: params.solver_iterations,
@@ -251,6 +256,7 @@ impl<'a> Run<'a> {
             s: start,
             t: 0.0,
             cr,
+            friction,
             touching: vec![false; rock.vertices_m.len()],
             barrier_met: vec![false; terrain.barriers.len()],
             drag_per_s: terrain
@@ -562,7 +568,7 @@ impl<'a> Run<'a> {
             }
             let Some((depth, mut normal, triangle)) = surface.penetration(&p) else { continue };
             let m = self.terrain.triangle_material[triangle as usize] as usize;
-            let (mu_static, mu_dynamic) = self.terrain.friction[m];
+            let (mu_static, mu_dynamic) = self.friction[m];
             let new = !self.touching[i];
             let mut cr = self.cr[m];
             if new && self.params.cr_draw == CrDraw::PerImpact {

@@ -2,7 +2,7 @@
 //! parameter set, used by the seed paper), and the paper's Table 2 rows as named presets.
 
 use crate::error::{Error, Result};
-use crate::random::TruncNormal;
+use crate::random::{Rng, TruncNormal};
 
 /// A ground material for 3D rigid-body rocks.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -15,6 +15,12 @@ pub struct Material {
     pub static_friction_deg: f64,
     /// Dynamic friction angle, degrees: a slipping contact gets |P_t| = tan(φ_d)·P_n.
     pub dynamic_friction_deg: f64,
+    /// Spread of the dynamic friction angle between rocks, degrees (0 = none): each rock draws its own angle once,
+    /// from a normal of this sd truncated at ±3 sd and to [0, 89]°, and its static angle is raised to the drawn
+    /// one where that is larger. RocFall draws its material inputs from normal distributions truncated at ±3σ
+    /// (physics.md §3); one draw per rock (not per contact), standing for ground that differs from path to path,
+    /// is ours.
+    pub dynamic_friction_sd_deg: f64,
     /// Soft-ground drag: while a rock touches this material its velocity and spin decay as exp(−c·t), c this
     /// rate, 1/s (0 = none; a linear stand-in for RAMMS's scarring drag, Lu et al. 2019, physics.md §2; ours).
     pub drag_per_s: f64,
@@ -39,6 +45,7 @@ impl Material {
             cr: TruncNormal::three_sigma(m, sd, 0.0, 1.0),
             static_friction_deg: s,
             dynamic_friction_deg: d,
+            dynamic_friction_sd_deg: 0.0,
             drag_per_s: 0.0,
         })
     }
@@ -56,6 +63,13 @@ impl Material {
                     "give a friction angle such as 40",
                 ));
             }
+        }
+        if !(self.dynamic_friction_sd_deg.is_finite() && (0.0..=30.0).contains(&self.dynamic_friction_sd_deg)) {
+            return Err(Error::invalid(
+                format!("{field}.dynamic_friction_sd_deg"),
+                format!("must be in [0, 30] degrees, got {}", self.dynamic_friction_sd_deg),
+                "give 0 (every rock the same) or a spread such as 3",
+            ));
         }
         if !(self.drag_per_s.is_finite() && self.drag_per_s >= 0.0) {
             return Err(Error::invalid(
@@ -86,6 +100,18 @@ impl Material {
     pub fn mu_dynamic(&self) -> f64 {
         self.dynamic_friction_deg.to_radians().tan()
     }
+
+    /// (tan φ_s, tan φ_d) for one rock: `cached` (this material's [`Self::mu_static`], [`Self::mu_dynamic`]) when
+    /// there is no spread, else a drawn dynamic angle (see [`Self::dynamic_friction_sd_deg`]). Draws nothing from
+    /// `rng` without a spread, so runs without one keep their random sequence.
+    pub fn friction_for_rock(&self, cached: (f64, f64), rng: &mut Rng) -> (f64, f64) {
+        if self.dynamic_friction_sd_deg <= 0.0 {
+            return cached;
+        }
+        let d =
+            TruncNormal::three_sigma(self.dynamic_friction_deg, self.dynamic_friction_sd_deg, 0.0, 89.0).sample(rng);
+        (self.static_friction_deg.max(d).to_radians().tan(), d.to_radians().tan())
+    }
 }
 
 #[cfg(test)]
@@ -101,5 +127,19 @@ mod tests {
         m.cr.mean = 1.5;
         let e = m.validate("materials.face").unwrap_err().to_string();
         assert!(e.contains("materials.face.cr") && e.contains("1.5"), "{e}");
+    }
+
+    #[test]
+    fn friction_without_a_spread_draws_nothing() {
+        let m = Material::preset("face_all").unwrap();
+        let cached = (m.mu_static(), m.mu_dynamic());
+        let (mut a, mut b) = (crate::random::stream(3, 0), crate::random::stream(3, 0));
+        assert_eq!(m.friction_for_rock(cached, &mut a), cached);
+        assert_eq!(crate::random::uniform(&mut a), crate::random::uniform(&mut b));
+        let spread = Material { dynamic_friction_sd_deg: 2.0, ..m };
+        let (s, d) = spread.friction_for_rock(cached, &mut a);
+        assert!(d != cached.1 && s >= d, "{s} {d}");
+        let e = Material { dynamic_friction_sd_deg: -1.0, ..spread }.validate("materials.face").unwrap_err();
+        assert!(e.to_string().contains("materials.face.dynamic_friction_sd_deg"), "{e}");
     }
 }
