@@ -1,10 +1,12 @@
 //! The Tschamut campaign simulated under parameters you give, per block: observed and simulated mean run-out, bias,
-//! run-out MAE, W1 and coverage (20 repeats per run, all 80 runs). For looking at what a parameter or an effect does to
-//! each block without a calibration.
+//! run-out MAE, W1 and coverage (20 repeats per run, all 80 runs), the mean width of a run's simulated 5-95 % range
+//! and the observed run-outs' sd within a release group. For looking at what a parameter or an effect does to each
+//! block without a calibration.
 //!
-//! Run: cargo run --release --example explore_tschamut -- CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
+//! Run: cargo run --release --example explore_tschamut -- CR CR_SD STATIC_DEG DYNAMIC_DEG
+//!        [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
 //! e.g. `-- 0.30 0.06 35.4 20.3` (a W1 k-fold fold's baseline), `-- 0.30 0.06 35.4 14.0 10` (with vegetation drag)
-//! and `-- 0.18 0.13 42 17 5.6 4` (and a dynamic friction spread of 4° between rocks)
+//! and `-- 0.175 0.127 42.3 18.5 5.65 3` (and a dynamic friction spread of 3° between rocks)
 use std::collections::BTreeMap;
 use std::path::Path;
 use talus::calibrate::config::CalibrationConfig;
