@@ -165,8 +165,12 @@ fn a_declared_effect_is_fitted_with_the_baseline() {
     let mut cfg = CalibrationConfig::default();
     cfg.effects.declared.insert("speed_restitution".into(), ParamSetting::Range([3.0, 30.0]));
     let model = synthetic_2d(&case_2d("speed", 1).unwrap(), Options2d::default()).unwrap();
-    cfg.check_effects(model.kind(), "test").unwrap();
     let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+    // A name the model does not know is an error, also for a library caller that skipped `check_effects`.
+    let mut typo = cfg.clone();
+    typo.effects.declared.insert("speed_restitutoin".into(), ParamSetting::Fixed(10.0));
+    let e = calibrate(&model, &typo, &cal, &hold, "seeded", None, &quiet).err().unwrap().to_string();
+    assert!(e.contains("effects.declared.speed_restitutoin"), "{e}");
     let r = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report;
     let k = r.baseline.parameters.get("speed_restitution.k_mps").unwrap();
     assert!((5.0..20.0).contains(&k), "K {k} m/s, hidden 10");

@@ -127,6 +127,8 @@ pub fn calibrate(
             "hold out fewer runs",
         ));
     }
+    // A library caller may not have come through `open_model`: an effect name it cannot use is an error here too.
+    cfg.check_effects(model.kind(), "calibration settings")?;
     let t0 = Instant::now();
     let ctx = Context::new(model, cfg, log);
     let runs = model.runs();
