@@ -47,7 +47,13 @@ fn main() {
         for r in &s {
             groups.entry(model.runs()[r.run].group).or_default().push(model.runs()[r.run].runout_m);
         }
-        let within: Vec<f64> = groups.values().flat_map(|g| g.iter().map(move |x| x - mean(g))).collect();
+        let within: Vec<f64> = groups
+            .values()
+            .flat_map(|g| {
+                let m = mean(g);
+                g.iter().map(move |x| x - m)
+            })
+            .collect();
         let n_groups = groups.len() as f64;
         let sd = (within.iter().map(|d| d * d).sum::<f64>() / (within.len() as f64 - n_groups).max(1.0)).sqrt();
         println!(

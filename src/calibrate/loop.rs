@@ -44,7 +44,8 @@ use super::metrics::crps;
 use super::model::{Model, RunSims, Sim};
 use super::objective::{objective, objective_of};
 use super::params::{
-    apply_mobility_2d, apply_mobility_3d, fold_mobility, Candidate, EffectSpec, FreeParam, Region, MOBILITY,
+    apply_mobility_2d, apply_mobility_3d, fold_mobility, friction_over, Candidate, EffectSpec, FreeParam, Region,
+    MOBILITY,
 };
 use super::split::folds;
 use super::stats::{mean, paired_sign_flip_p};
@@ -363,21 +364,19 @@ pub fn effects_loop(
 
 /// Multiplies every material's (and zone's) mean restitution (Cr in 3DRB, Rn in 2DLM) by `f`, capped at 1.
 fn scale_cr(c: &mut Candidate, f: f64) {
-    let names: Vec<String> =
-        c.params.0.keys().filter(|k| k.ends_with(".cr_mean") || k.ends_with(".rn_mean")).cloned().collect();
-    for n in names {
-        let v = c.params.get_or(&n, 0.0);
-        c.params.set(n, (v * f).min(1.0));
-    }
+    map_params(c, &[".cr_mean", ".rn_mean"], |v| (v * f).min(1.0));
 }
 
 /// Divides tan of every material's (and zone's) dynamic friction angle by `f` (3DRB; f > 1 is more slippery, as
 /// with the mobility factor).
 fn scale_dynamic_friction(c: &mut Candidate, f: f64) {
-    let names: Vec<String> = c.params.0.keys().filter(|k| k.ends_with(".dynamic_friction_deg")).cloned().collect();
-    for n in names {
-        let v = c.params.get_or(&n, 0.0);
-        c.params.set(n, (v.to_radians().tan() / f).atan().to_degrees());
+    map_params(c, &[".dynamic_friction_deg"], |v| friction_over(v, f));
+}
+
+/// Replaces every parameter whose name ends with one of `suffixes` by `f` of its value.
+fn map_params(c: &mut Candidate, suffixes: &[&str], f: impl Fn(f64) -> f64) {
+    for (_, v) in c.params.0.iter_mut().filter(|(k, _)| suffixes.iter().any(|s| k.ends_with(s))) {
+        *v = f(*v);
     }
 }
 

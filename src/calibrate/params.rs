@@ -153,19 +153,19 @@ pub fn normalize(params: &mut Params) {
 /// with tan φ / m, so that m > 1 makes every contact bouncier and more slippery and m < 1 the reverse. The dynamic
 /// angle is capped at the static one. Returns (cr_mean, cr_sd, static °, dynamic °).
 pub fn apply_mobility_3d(cr_mean: f64, cr_sd: f64, static_deg: f64, dynamic_deg: f64, m: f64) -> (f64, f64, f64, f64) {
-    let f = |deg: f64| (deg.to_radians().tan() / m).atan().to_degrees();
-    let (s, d) = (f(static_deg), f(dynamic_deg.min(static_deg)));
+    let (s, d) = (friction_over(static_deg, m), friction_over(dynamic_deg.min(static_deg), m));
     ((cr_mean * m).clamp(0.0, 1.0), cr_sd, s, d.min(s))
 }
 
 /// Material values of a 2DLM material after the mobility factor m (ours): Rn·m, the tangential loss (1 − Rt)/m,
 /// tan φ / m (all clamped to their ranges). Returns (rn, rt, friction °).
 pub fn apply_mobility_2d(rn: f64, rt: f64, friction_deg: f64, m: f64) -> (f64, f64, f64) {
-    (
-        (rn * m).clamp(0.0, 1.0),
-        (1.0 - (1.0 - rt) / m).clamp(0.0, 1.0),
-        (friction_deg.to_radians().tan() / m).atan().to_degrees(),
-    )
+    ((rn * m).clamp(0.0, 1.0), (1.0 - (1.0 - rt) / m).clamp(0.0, 1.0), friction_over(friction_deg, m))
+}
+
+/// The friction angle whose tangent is tan(`deg`)/`m`, degrees: `m` > 1 makes the contact more slippery.
+pub fn friction_over(deg: f64, m: f64) -> f64 {
+    (deg.to_radians().tan() / m).atan().to_degrees()
 }
 
 /// The parameters with the mobility factor folded into the material (and zone) values, and the factor reset to 1.
