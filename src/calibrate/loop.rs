@@ -153,8 +153,9 @@ pub fn effects_loop(
         let zc = zone_allowed.then(|| zone_check(model, &diag_sims, &frame, 199, cfg.seed.wrapping_add(round as u64)));
         if let Some(z) = &zc {
             (ctx.log)(&format!(
-                "effects loop, round {round}: zone check p = {:.3} (largest deposition excess {:.3})",
-                z.p_value, z.statistic
+                "effects loop, round {round}: zone check p = {:.3} (largest deposition excess {:.3}, p {:.3}; \
+                 overrun share {:.3}, p {:.3})",
+                z.p_value, z.statistic, z.deposition_p_value, z.overrun_share, z.overrun_p_value
             ));
         }
         let proposals = propose(
@@ -693,10 +694,10 @@ struct Arm {
     full: Vec<usize>,
 }
 
-/// The zone arm: candidate zones per fold from the training runs' deposition excess, and from all calibration runs
-/// for the refit's start; each stepped over the zone mobility grid. Simulations whose path under the baseline
-/// setting stays away from the zone are taken from it (exact: same streams, same parameters, never touching the
-/// zone).
+/// The zone arm: candidate zones per fold from the training runs' deposition excess and overrun band, and from all
+/// calibration runs for the refit's start; each stepped over the zone mobility grid. Simulations whose path under
+/// the baseline setting stays away from the zone are taken from it (exact: same streams, same parameters, never
+/// touching the zone).
 fn zone_arm(
     ctx: &Context,
     base_arm: &Arm,

@@ -197,7 +197,7 @@ pub fn calibrate(
         effects_tried: lp.trials.clone(),
         diagnostics: diag_base,
         diagnostics_final: diag_final,
-        zone_check: Some((zc.statistic, zc.p_value)),
+        zone_check: Some((&zc).into()),
         back_analysis: back,
         population_fit: serde_json::json!({
             "objective": cfg.objective,
