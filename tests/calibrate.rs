@@ -295,3 +295,32 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("repeatz"));
 }
+
+#[test]
+fn the_zone_check_flags_simulations_that_overrun_the_field_and_not_the_true_model() {
+    use talus::calibrate::model::evaluate;
+    use talus::calibrate::synthetic::truth_2d;
+    use talus::calibrate::zone::zone_check;
+    let spec = Synthetic2d { seed: 4, runs_per_group: 6, ..Default::default() };
+    let model = synthetic_2d(&spec, Options2d::default()).unwrap();
+    let all: Vec<usize> = (0..model.runs().len()).collect();
+    let check = |c: &talus::calibrate::params::Candidate| {
+        let sims = evaluate(&model, c, &all, 20, 1, 0).unwrap();
+        zone_check(&model, &sims, &model.map_frame(), 99, 1)
+    };
+    let truth = truth_2d(&spec);
+    let right = check(&truth);
+    // The true model overruns its own field runs no more than chance.
+    assert!(right.overrun_p_value > 0.1, "{} p {}", right.overrun_share, right.overrun_p_value);
+    // Too little friction: the simulated rocks run past the field's farthest runs, and the check says so.
+    let mut slippery = truth.clone();
+    slippery.params.set("ground.friction_angle_deg", 0.6 * TRUE_2D[4]);
+    let wrong = check(&slippery);
+    assert!(wrong.overrun_share > right.overrun_share + 0.2, "{} vs {}", wrong.overrun_share, right.overrun_share);
+    assert!(wrong.overrun_p_value <= 0.02 && wrong.p_value <= 0.04, "{} {}", wrong.overrun_p_value, wrong.p_value);
+    // The overrun band is the last candidate zone: around the farthest field rest points, where the simulated
+    // rocks pass them (measured: x 22-34 m, the farthest field rest point at 28 m, the nearest at 2 m).
+    let far = model.runs().iter().map(|r| r.rest_m[0]).fold(f64::NEG_INFINITY, f64::max);
+    let band = wrong.regions.last().unwrap();
+    assert!(matches!(band, Region::Interval([a, b]) if *a <= far && *b >= far - 5.0 && b - a <= 20.0), "{band:?}");
+}
