@@ -1,7 +1,7 @@
 //! `talus calibrate` on synthetic campaigns made with talus itself (small versions of the study in
 //! `examples/calibration_study.rs`; the figures of the full study are in docs/calibration.md).
 
-use talus::calibrate::config::{CalibrationConfig, ModelKind, ParamSetting};
+use talus::calibrate::config::{CalibrationConfig, ModelKind, Objective, ParamSetting};
 use talus::calibrate::params::Region;
 use talus::calibrate::synthetic::{case_2d, synthetic_2d, synthetic_3d, Synthetic2d, Synthetic3d, TRUE_2D};
 use talus::calibrate::{calibrate, split, Model};
@@ -202,15 +202,33 @@ fn declared_effects_are_checked_against_the_model() {
 
 #[test]
 fn the_shipped_tschamut_settings_parse() {
-    let names =
-        ["calibrate", "kfold", "kfold_w1", "vegetation", "spread", "spread_loop"].map(|n| format!("tschamut_{n}"));
+    let names = ["calibrate", "kfold", "kfold_w1", "vegetation", "spread", "spread_loop", "combined"]
+        .map(|n| format!("tschamut_{n}"));
     for name in &names {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/{name}.toml"));
         let cfg = CalibrationConfig::read(&path).unwrap();
         cfg.check_effects(ModelKind::Rigid3d, name).unwrap();
         let spread = cfg.setting(ModelKind::Rigid3d, "default", "dynamic_friction_sd_deg");
-        assert_eq!(spread.bounds().is_some(), name.starts_with("tschamut_spread"), "{name}: {spread:?}");
+        let frees_spread = name.starts_with("tschamut_spread") || name == "tschamut_combined";
+        assert_eq!(spread.bounds().is_some(), frees_spread, "{name}: {spread:?}");
+        assert_eq!(cfg.objective == Objective::CrpsW1Groups, name == "tschamut_combined", "{name}");
     }
+}
+
+#[test]
+fn the_combined_objective_is_the_mean_of_the_crps_and_the_group_w1() {
+    use talus::calibrate::model::evaluate;
+    use talus::calibrate::objective::objective;
+    let spec = Synthetic2d { seed: 4, runs_per_group: 6, ..Default::default() };
+    let model = synthetic_2d(&spec, Options2d::default()).unwrap();
+    let all: Vec<usize> = (0..model.runs().len()).collect();
+    let mut c = talus::calibrate::synthetic::truth_2d(&spec);
+    c.params.set("ground.friction_angle_deg", 25.0);
+    let sims = evaluate(&model, &c, &all, 10, 1, 0).unwrap();
+    let f = |o: Objective| objective(o, model.runs(), &sims);
+    let (crps, w1) = (f(Objective::Crps), f(Objective::W1Groups));
+    assert!(crps > 0.0 && w1 > 0.0 && (crps - w1).abs() > 1e-6, "{crps} {w1}");
+    assert!((f(Objective::CrpsW1Groups) - 0.5 * (crps + w1)).abs() < 1e-9);
 }
 
 #[test]

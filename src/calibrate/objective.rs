@@ -29,6 +29,9 @@ pub fn objective_of(kind: Objective, runs: &[FieldRun], sims: &[&RunSims]) -> f6
         Objective::Crps => {
             mean(&sims.iter().map(|s| super::metrics::crps(&s.runouts(), runs[s.run].runout_m)).collect::<Vec<_>>())
         }
+        Objective::CrpsW1Groups => {
+            0.5 * (objective_of(Objective::Crps, runs, sims) + objective_of(Objective::W1Groups, runs, sims))
+        }
         Objective::W1Groups => {
             let mut groups: BTreeMap<usize, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
             for s in sims {
