@@ -98,6 +98,13 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
     }
     let d = &json["diagnostics"][0];
     assert!(d.get("covariate").is_some() && d.get("spearman_rho").is_some() && d.get("p_value").is_some());
+    let z = &json["zone_check"];
+    for k in ["deposition_excess", "deposition_p_value", "overrun_share", "overrun_p_value", "p_value"] {
+        assert!(z[k].is_f64(), "zone_check lacks {k}: {z}");
+    }
+    let p = z["p_value"].as_f64().unwrap();
+    let smaller = z["deposition_p_value"].as_f64().unwrap().min(z["overrun_p_value"].as_f64().unwrap());
+    assert!((p - (2.0 * smaller).min(1.0)).abs() < 1e-12, "{z}");
     for f in [
         "report.md",
         "runs.csv",
