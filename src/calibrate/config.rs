@@ -179,7 +179,7 @@ pub enum Objective {
     /// 1-Wasserstein distance over all runs pooled.
     W1,
     /// The mean of `crps` and `w1_groups` (ours: the CRPS fits each run's range, the group W1 each release's
-    /// run-out distribution; on Tschamut each alone meets one half of the aims).
+    /// run-out distribution; on Tschamut the CRPS fit alone reached the coverage aim, the W1 fit the smaller bias).
     CrpsW1Groups,
     /// Mean over runs of |median simulated − observed run-out|.
     Mae,
