@@ -20,6 +20,9 @@ use talus::calibrate::synthetic::material_params_3d;
 use talus::calibrate::zone::overrun_share;
 use talus::calibrate::{open_model, ModelKind};
 
+/// Simulations per run.
+const REPEATS: usize = 20;
+
 fn main() {
     let args: Vec<f64> = std::env::args().skip(1).map(|a| a.parse().expect("numbers")).collect();
     if !(4..=6).contains(&args.len()) {
@@ -36,7 +39,7 @@ fn main() {
         Candidate { params: material_params_3d("default", [args[0], args[1], args[2], args[3]]), ..Default::default() };
     c.params.set("default.dynamic_friction_sd_deg", args.get(5).copied().unwrap_or(0.0));
     let all: Vec<usize> = (0..model.runs().len()).collect();
-    let sims = evaluate(model.as_ref(), &c, &all, 20, 1, 0).unwrap();
+    let sims = evaluate(model.as_ref(), &c, &all, REPEATS, 1, 0).unwrap();
     println!(
         "block  runs  observed m  simulated m  bias m  MAE m  floor m  W1 m  coverage  90% width m  obs sd in group m  overrun"
     );
@@ -69,7 +72,7 @@ fn main() {
             m.scatter_floor_mae_m,
             m.runout_w1_m,
             m.coverage_90,
-            overrun_share(model.runs(), &s, 0..20)
+            overrun_share(model.runs(), &s, 0..REPEATS)
         );
     }
 }

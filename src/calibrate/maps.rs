@@ -116,7 +116,7 @@ pub fn deposition_excess(
     for s in sims {
         let r = &runs[s.run];
         deposit(g, &mut field, r.rest_m[0], r.rest_m[1], 1.0, h, profile);
-        let chosen = &s.sims[sim_range.start.min(s.sims.len())..sim_range.end.min(s.sims.len())];
+        let chosen = s.repeats_in(sim_range.clone());
         let w = 1.0 / chosen.len().max(1) as f64;
         for sim in chosen {
             deposit(g, &mut field, sim.rest_m[0], sim.rest_m[1], -w, h, profile);

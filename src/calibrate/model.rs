@@ -59,6 +59,12 @@ pub struct RunSims {
 }
 
 impl RunSims {
+    /// The repeats in `range`, cut to the repeats there are.
+    pub fn repeats_in(&self, range: std::ops::Range<usize>) -> &[Sim] {
+        let n = self.sims.len();
+        &self.sims[range.start.min(n)..range.end.min(n)]
+    }
+
     /// The simulated run-outs.
     pub fn runouts(&self) -> Vec<f64> {
         self.sims.iter().map(|s| s.runout_m).collect()

@@ -125,7 +125,7 @@ pub fn overrun_share(runs: &[FieldRun], sims: &[RunSims], range: std::ops::Range
     let (mut over, mut n) = (0usize, 0usize);
     for s in sims {
         let lim = limit[&runs[s.run].group];
-        for sim in &s.sims[range.start.min(s.sims.len())..range.end.min(s.sims.len())] {
+        for sim in s.repeats_in(range.clone()) {
             n += 1;
             over += usize::from(sim.runout_m > lim);
         }
