@@ -98,6 +98,7 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
     }
     let d = &json["diagnostics"][0];
     assert!(d.get("covariate").is_some() && d.get("spearman_rho").is_some() && d.get("p_value").is_some());
+    assert_eq!(json["duplicate_runs"], serde_json::json!([]), "a synthetic campaign has no duplicated record");
     let z = &json["zone_check"];
     for k in ["deposition_excess", "deposition_p_value", "overrun_share", "overrun_p_value", "p_value"] {
         assert!(z[k].is_f64(), "zone_check lacks {k}: {z}");
@@ -220,6 +221,31 @@ fn the_shipped_tschamut_settings_parse() {
         assert_eq!(spread.bounds().is_some(), frees_spread, "{name}: {spread:?}");
         assert_eq!(cfg.objective == Objective::CrpsW1Groups, name == "tschamut_combined", "{name}");
     }
+}
+
+#[test]
+fn the_tschamut_campaign_holds_one_duplicated_record() {
+    use talus::calibrate::runs::{duplicate_runs, field_runs};
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/tschamut2014");
+    let campaign = talus::campaign::Campaign::read(&dir).unwrap();
+    let (mut runs, _) = field_runs(&campaign, 100.0).unwrap();
+    // v033 and v034 agree in every column of both files (release, velocity, rest).
+    assert_eq!(duplicate_runs(&runs), vec![["v033".to_string(), "v034".to_string()]]);
+    // The copies are never on both sides: same fold in the 5-fold and the loop's inner folds, for any seed.
+    let pos = |id: &str| runs.iter().position(|r| r.id == id).unwrap();
+    let (a, b) = (pos("v033"), pos("v034"));
+    let all: Vec<usize> = (0..runs.len()).collect();
+    for seed in 1..=20 {
+        let f = split::folds(&runs, &all, 5, seed, 100);
+        assert_eq!(f[a], f[b], "seed {seed}");
+        let (cal, hold) = split::seeded_split(&runs, 0.2, seed);
+        assert_eq!(cal.contains(&a), cal.contains(&b), "seed {seed}");
+        assert_eq!(hold.contains(&a), hold.contains(&b), "seed {seed}");
+    }
+    // Runs that differ only in their rest point are not duplicates.
+    let i = pos("v034");
+    runs[i].rest_m[0] += 0.01;
+    assert!(duplicate_runs(&runs).is_empty());
 }
 
 #[test]

@@ -181,6 +181,7 @@ pub fn calibrate(
         holdout_ids: ids(hold),
         split: split.into(),
         release_groups,
+        duplicate_runs: runs::duplicate_runs(runs),
         baseline: report::Stage::new(
             baseline.params.clone(),
             labels(&baseline),

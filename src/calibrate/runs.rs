@@ -146,3 +146,26 @@ pub fn assign_groups(runs: &mut [FieldRun], link_m: f64) -> Vec<String> {
     }
     names
 }
+
+/// True if two runs are the same record: same block, and release position, initial velocity and rest point
+/// equal to the micrometre. A duplicated record weighs twice in every fit, and on both sides of a split it would
+/// be a held-out run the calibration saw, so splits and folds keep copies together ([`super::split::folds`]); it is
+/// reported, not removed (ours: the data are the user's).
+pub fn same_record(a: &FieldRun, b: &FieldRun) -> bool {
+    let same = |p: &[f64; 3], q: &[f64; 3]| p.iter().zip(q).all(|(u, v)| (u - v).abs() < 1e-6);
+    a.block_id == b.block_id
+        && same(&a.release_m, &b.release_m)
+        && same(&a.velocity_mps, &b.velocity_mps)
+        && same(&a.rest_m, &b.rest_m)
+}
+
+/// Pairs of runs that are the same record ([`same_record`]), by `trajectory_id`.
+pub fn duplicate_runs(runs: &[FieldRun]) -> Vec<[String; 2]> {
+    let mut out = Vec::new();
+    for (i, a) in runs.iter().enumerate() {
+        for b in runs[i + 1..].iter().filter(|b| same_record(a, b)) {
+            out.push([a.id.clone(), b.id.clone()]);
+        }
+    }
+    out
+}

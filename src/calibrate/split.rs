@@ -4,7 +4,7 @@
 //! round-robin, so every group is represented on both sides in proportion and the held-out error speaks for every
 //! block. Everything is a function of the seed alone.
 
-use super::runs::FieldRun;
+use super::runs::{same_record, FieldRun};
 use super::stats::shuffle;
 use crate::error::{Error, Result};
 use crate::random::stream;
@@ -50,7 +50,8 @@ pub fn read_holdout(path: &Path, runs: &[FieldRun]) -> Result<Vec<usize>> {
     Ok(out)
 }
 
-/// Assigns every run to one of `k` folds, stratified by release group; returns the fold of each run.
+/// Assigns every run to one of `k` folds, stratified by release group; returns the fold of each run. A copy of a
+/// duplicated record ([`same_record`]) goes to the fold of its first copy.
 pub fn folds(runs: &[FieldRun], which: &[usize], k: usize, seed: u64, purpose: u64) -> Vec<usize> {
     let mut by_group: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     for (pos, &i) in which.iter().enumerate() {
@@ -64,6 +65,11 @@ pub fn folds(runs: &[FieldRun], which: &[usize], k: usize, seed: u64, purpose: u
         for &pos in members.iter() {
             fold[pos] = next % k;
             next += 1;
+        }
+    }
+    for j in 0..which.len() {
+        if let Some(i) = (0..j).find(|&i| same_record(&runs[which[i]], &runs[which[j]])) {
+            fold[j] = fold[i];
         }
     }
     fold

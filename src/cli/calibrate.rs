@@ -72,6 +72,9 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     let t0 = Instant::now();
     let log = move |msg: &str| eprintln!("[{:6.1} s] {msg}", t0.elapsed().as_secs_f64());
     let runs = model.runs();
+    for [a, b] in calibrate::runs::duplicate_runs(runs) {
+        eprintln!("warning: runs {a} and {b} are the same record (release state and rest point); both are used, kept in one fold");
+    }
     if let Some(k) = a.kfold {
         if a.holdout.is_some() {
             anyhow::bail!("--kfold and --holdout exclude each other: the k-fold study holds out every run once");
