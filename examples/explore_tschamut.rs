@@ -5,7 +5,11 @@
 //! run of their release group (the zone check's overrun share; about 1/(n+1) for a group of n runs if the model
 //! were right).
 //!
-//! Run: cargo run --release --example explore_tschamut -- CR CR_SD STATIC_DEG DYNAMIC_DEG
+//! The column `edge` gives the share of runs ending below y = 135 m, observed / simulated: within 5 m of the lower
+//! edge of the proxy's LPS data (y = 130 m) or past it. With `--clip` the proxy is clipped to that data
+//! (`examples/tschamut.toml`), so a simulated rock that crosses the edge ends there.
+//!
+//! Run: cargo run --release --example explore_tschamut -- [--clip] CR CR_SD STATIC_DEG DYNAMIC_DEG
 //!        [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
 //! e.g. `-- 0.30 0.06 35.4 20.3` (a W1 k-fold fold's baseline), `-- 0.30 0.06 35.4 14.0 10` (with vegetation drag)
 //! and `-- 0.175 0.127 42.3 18.5 5.65 3` (and a dynamic friction spread of 3° between rocks)
@@ -22,17 +26,29 @@ use talus::calibrate::{open_model, ModelKind};
 
 /// Simulations per run.
 const REPEATS: usize = 20;
+/// The lower edge of the proxy's LPS data (its 45 m padding removed), m.
+const DATA_EDGE_Y_M: f64 = 130.0;
 
 fn main() {
-    let args: Vec<f64> = std::env::args().skip(1).map(|a| a.parse().expect("numbers")).collect();
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let clip = args.first().is_some_and(|a| a == "--clip");
+    if clip {
+        args.remove(0);
+    }
+    let args: Vec<f64> = args.iter().map(|a| a.parse().expect("numbers")).collect();
     if !(4..=6).contains(&args.len()) {
         eprintln!(
-            "usage: explore_tschamut CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]"
+            "usage: explore_tschamut [--clip] CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S \
+             [DYNAMIC_FRICTION_SD_DEG]]"
         );
         std::process::exit(2);
     }
     let dir = Path::new("meshes/tschamut2014");
     let mut cfg = CalibrationConfig::default();
+    if clip {
+        let (y0, y1) = (DATA_EDGE_Y_M, 270.0);
+        cfg.terrain.clip = Some(vec![[10.0, y0], [135.0, y0], [135.0, y1], [10.0, y1]]);
+    }
     cfg.simulation.effects.vegetation_drag_kg_s = args.get(4).copied().filter(|&c| c > 0.0);
     let model = open_model(dir, &dir.join("terrain_proxy.asc"), ModelKind::Rigid3d, &cfg, "explore_tschamut").unwrap();
     let mut c =
@@ -41,7 +57,7 @@ fn main() {
     let all: Vec<usize> = (0..model.runs().len()).collect();
     let sims = evaluate(model.as_ref(), &c, &all, REPEATS, 1, 0).unwrap();
     println!(
-        "block  runs  observed m  simulated m  bias m  MAE m  floor m  W1 m  coverage  90% width m  obs sd in group m  overrun"
+        "block  runs  observed m  simulated m  bias m  MAE m  floor m  W1 m  coverage  90% width m  obs sd in group m  overrun  edge obs/sim"
     );
     for block in ["1", "2", "4"] {
         let s: Vec<_> = sims.iter().filter(|s| model.runs()[s.run].block_id == block).cloned().collect();
@@ -60,10 +76,14 @@ fn main() {
                 g.iter().map(move |x| x - m)
             })
             .collect();
+        let near_edge = |y: f64| y < DATA_EDGE_Y_M + 5.0;
+        let edge_obs = s.iter().filter(|r| near_edge(model.runs()[r.run].rest_m[1])).count() as f64 / s.len() as f64;
+        let sims_all: Vec<_> = s.iter().flat_map(|r| &r.sims).collect();
+        let edge_sim = sims_all.iter().filter(|x| near_edge(x.rest_m[1])).count() as f64 / sims_all.len() as f64;
         let n_groups = groups.len() as f64;
         let sd = (within.iter().map(|d| d * d).sum::<f64>() / (within.len() as f64 - n_groups).max(1.0)).sqrt();
         println!(
-            "{block:>5}  {:>4}  {:>10.1}  {:>11.1}  {:>+6.1}  {:>5.1}  {:>7.1}  {:>4.1}  {:>8.2}  {width:>11.1}  {sd:>17.1}  {:>7.3}",
+            "{block:>5}  {:>4}  {:>10.1}  {:>11.1}  {:>+6.1}  {:>5.1}  {:>7.1}  {:>4.1}  {:>8.2}  {width:>11.1}  {sd:>17.1}  {:>7.3}  {edge_obs:.2}/{edge_sim:.2}",
             m.runs,
             m.observed_mean_m,
             m.simulated_mean_m,

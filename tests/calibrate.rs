@@ -210,16 +210,17 @@ fn declared_effects_are_checked_against_the_model() {
 
 #[test]
 fn the_shipped_tschamut_settings_parse() {
-    let names = ["calibrate", "kfold", "kfold_w1", "vegetation", "spread", "spread_loop", "combined"]
+    let names = ["calibrate", "kfold", "kfold_w1", "vegetation", "spread", "spread_loop", "combined", "combined_clip"]
         .map(|n| format!("tschamut_{n}"));
     for name in &names {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/{name}.toml"));
         let cfg = CalibrationConfig::read(&path).unwrap();
         cfg.check_effects(ModelKind::Rigid3d, name).unwrap();
         let spread = cfg.setting(ModelKind::Rigid3d, "default", "dynamic_friction_sd_deg");
-        let frees_spread = name.starts_with("tschamut_spread") || name == "tschamut_combined";
+        let frees_spread = name.starts_with("tschamut_spread") || name.starts_with("tschamut_combined");
         assert_eq!(spread.bounds().is_some(), frees_spread, "{name}: {spread:?}");
-        assert_eq!(cfg.objective == Objective::CrpsW1Groups, name == "tschamut_combined", "{name}");
+        assert_eq!(cfg.objective == Objective::CrpsW1Groups, name.starts_with("tschamut_combined"), "{name}");
+        assert_eq!(cfg.terrain.clip.is_some(), name == "tschamut_combined_clip", "{name}");
     }
 }
 

@@ -181,6 +181,11 @@ pub enum Objective {
     /// The mean of `crps` and `w1_groups` (ours: the CRPS fits each run's range, the group W1 each release's
     /// run-out distribution; on Tschamut the CRPS fit alone reached the coverage aim, the W1 fit the smaller bias).
     CrpsW1Groups,
+    /// Mean over runs of the energy score of the simulated rest points against the observed one (the CRPS in the
+    /// plane, [`super::metrics::energy_score`]): scores where rocks stop, not only how far they run.
+    EnergyRest,
+    /// The mean of `energy_rest` and `w1_groups` (ours, as `crps_w1_groups`).
+    EnergyW1Groups,
     /// Mean over runs of |median simulated − observed run-out|.
     Mae,
 }

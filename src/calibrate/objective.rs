@@ -2,7 +2,8 @@
 //! each run's simulated run-outs against its observed run-out (Gneiting & Raftery 2007): a proper score, so it is
 //! smallest for the right predictive distribution of every run, median and spread together, and it is the score
 //! the effects loop cross-validates, so that a refit never undoes what the cross-validation credited (ours). The
-//! 1-Wasserstein distance per release group (physics.md §5) and the run-out MAE are the alternatives.
+//! 1-Wasserstein distance per release group (physics.md §5), the energy score of the rest points (the CRPS in the
+//! plane) and the run-out MAE are the alternatives.
 
 use super::config::Objective;
 use super::model::RunSims;
@@ -31,6 +32,19 @@ pub fn objective_of(kind: Objective, runs: &[FieldRun], sims: &[&RunSims]) -> f6
         }
         Objective::CrpsW1Groups => {
             0.5 * (objective_of(Objective::Crps, runs, sims) + objective_of(Objective::W1Groups, runs, sims))
+        }
+        Objective::EnergyRest => mean(
+            &sims
+                .iter()
+                .map(|s| {
+                    let rests: Vec<[f64; 2]> = s.sims.iter().map(|x| [x.rest_m[0], x.rest_m[1]]).collect();
+                    let r = &runs[s.run].rest_m;
+                    super::metrics::energy_score(&rests, [r[0], r[1]])
+                })
+                .collect::<Vec<_>>(),
+        ),
+        Objective::EnergyW1Groups => {
+            0.5 * (objective_of(Objective::EnergyRest, runs, sims) + objective_of(Objective::W1Groups, runs, sims))
         }
         Objective::W1Groups => {
             let mut groups: BTreeMap<usize, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
