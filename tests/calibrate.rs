@@ -243,6 +243,13 @@ fn the_tschamut_campaign_holds_one_duplicated_record() {
         assert_eq!(cal.contains(&a), cal.contains(&b), "seed {seed}");
         assert_eq!(hold.contains(&a), hold.contains(&b), "seed {seed}");
     }
+    // A hold-out file that lists one copy holds out both.
+    let dir = tempfile::tempdir().unwrap();
+    let ids = dir.path().join("holdout.txt");
+    std::fs::write(&ids, "v004\nv034\n").unwrap();
+    let mut expected = vec![pos("v004"), a, b];
+    expected.sort();
+    assert_eq!(split::read_holdout(&ids, &runs).unwrap(), expected);
     // Runs that differ only in their rest point are not duplicates.
     let i = pos("v034");
     runs[i].rest_m[0] += 0.01;

@@ -15,7 +15,8 @@ use std::path::Path;
 const SPLIT_STREAM: u64 = u64::MAX - 1000;
 
 /// Reads a hold-out file: one `trajectory_id` per line (blank lines and `#` comments ignored). Returns the indices
-/// of those runs. Every id must be a run with an observed rest point.
+/// of those runs, and of the copies of any duplicated record among them ([`same_record`]), which are held out with
+/// it. Every id must be a run with an observed rest point.
 pub fn read_holdout(path: &Path, runs: &[FieldRun]) -> Result<Vec<usize>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let mut out = Vec::new();
@@ -38,6 +39,11 @@ pub fn read_holdout(path: &Path, runs: &[FieldRun]) -> Result<Vec<usize>> {
     }
     if out.is_empty() {
         return Err(Error::format(path.display().to_string(), "lists no run", "put one trajectory_id per line"));
+    }
+    for (i, r) in runs.iter().enumerate() {
+        if !out.contains(&i) && out.iter().any(|&j| same_record(r, &runs[j])) {
+            out.push(i);
+        }
     }
     if out.len() + 3 > runs.len() {
         return Err(Error::format(
