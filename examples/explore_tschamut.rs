@@ -6,8 +6,8 @@
 //! were right).
 //!
 //! The column `edge` gives the share of runs ending below y = 135 m, observed / simulated: within 5 m of the lower
-//! edge of the proxy's LPS data (y = 130 m) or past it. With `--clip` the proxy is clipped to that data
-//! (`examples/tschamut.toml`), so a simulated rock that crosses the edge ends there.
+//! edge of the proxy's LPS data (y = 130 m) or past it. With `--clip` the proxy is clipped to that data as in
+//! `examples/tschamut_combined_clip.toml`, so a simulated rock that crosses the edge ends there.
 //!
 //! Run: cargo run --release --example explore_tschamut -- [--clip] CR CR_SD STATIC_DEG DYNAMIC_DEG
 //!        [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
@@ -46,8 +46,8 @@ fn main() {
     let dir = Path::new("meshes/tschamut2014");
     let mut cfg = CalibrationConfig::default();
     if clip {
-        let (y0, y1) = (DATA_EDGE_Y_M, 270.0);
-        cfg.terrain.clip = Some(vec![[10.0, y0], [135.0, y0], [135.0, y1], [10.0, y1]]);
+        let settings = CalibrationConfig::read(Path::new("examples/tschamut_combined_clip.toml")).unwrap();
+        cfg.terrain.clip = settings.terrain.clip;
     }
     cfg.simulation.effects.vegetation_drag_kg_s = args.get(4).copied().filter(|&c| c > 0.0);
     let model = open_model(dir, &dir.join("terrain_proxy.asc"), ModelKind::Rigid3d, &cfg, "explore_tschamut").unwrap();
