@@ -6,10 +6,12 @@
 //! were right).
 //!
 //! The column `edge` gives the share of runs ending below y = 135 m, observed / simulated: within 5 m of the lower
-//! edge of the proxy's LPS data (y = 130 m) or past it. With `--clip` the proxy is clipped to that data as in
-//! `examples/tschamut_combined_clip.toml`, so a simulated rock that crosses the edge ends there.
+//! edge of the proxy's LPS data (y = 130 m) or past it. With `--terrain-of SETTINGS` the proxy is modified as the
+//! `[terrain]` section of those calibration settings says: clipped to that data
+//! (`examples/tschamut_combined_clip.toml`: a simulated rock that crosses the edge ends there) or continued level
+//! past it (`examples/tschamut_combined_level.toml`).
 //!
-//! Run: cargo run --release --example explore_tschamut -- [--clip] CR CR_SD STATIC_DEG DYNAMIC_DEG
+//! Run: cargo run --release --example explore_tschamut -- [--terrain-of SETTINGS] CR CR_SD STATIC_DEG DYNAMIC_DEG
 //!        [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
 //! e.g. `-- 0.30 0.06 35.4 20.3` (a W1 k-fold fold's baseline), `-- 0.30 0.06 35.4 14.0 10` (with vegetation drag)
 //! and `-- 0.175 0.127 42.3 18.5 5.65 3` (and a dynamic friction spread of 3° between rocks)
@@ -31,23 +33,23 @@ const DATA_EDGE_Y_M: f64 = 130.0;
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
-    let clip = args.first().is_some_and(|a| a == "--clip");
-    if clip {
-        args.remove(0);
-    }
+    let terrain_of = if args.first().is_some_and(|a| a == "--terrain-of") && args.len() > 1 {
+        Some(args.drain(..2).nth(1).unwrap())
+    } else {
+        None
+    };
     let args: Vec<f64> = args.iter().map(|a| a.parse().expect("numbers")).collect();
     if !(4..=6).contains(&args.len()) {
         eprintln!(
-            "usage: explore_tschamut [--clip] CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S \
+            "usage: explore_tschamut [--terrain-of SETTINGS] CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S \
              [DYNAMIC_FRICTION_SD_DEG]]"
         );
         std::process::exit(2);
     }
     let dir = Path::new("meshes/tschamut2014");
     let mut cfg = CalibrationConfig::default();
-    if clip {
-        let settings = CalibrationConfig::read(Path::new("examples/tschamut_combined_clip.toml")).unwrap();
-        cfg.terrain.clip = settings.terrain.clip;
+    if let Some(file) = terrain_of {
+        cfg.terrain = CalibrationConfig::read(Path::new(&file)).unwrap().terrain;
     }
     cfg.simulation.effects.vegetation_drag_kg_s = args.get(4).copied().filter(|&c| c > 0.0);
     let model = open_model(dir, &dir.join("terrain_proxy.asc"), ModelKind::Rigid3d, &cfg, "explore_tschamut").unwrap();

@@ -134,6 +134,12 @@ pub struct TerrainSpec {
     /// crosses its edge leaves the terrain (default: keep everything).
     #[serde(default)]
     pub clip: Option<Vec<[f64; 2]>>,
+    /// Outside this polygon each vertex takes the height of the nearest vertex inside it (x, y in the files'
+    /// horizontal frame): the known ground continued level past its edge, for DEMs whose margins are extrapolated
+    /// by a trend the ground does not follow. Unlike `clip`, rocks go on across the edge (default: heights as in
+    /// the files).
+    #[serde(default)]
+    pub level_beyond: Option<Vec<[f64; 2]>>,
 }
 
 fn default_slope_face_deg() -> f64 {
@@ -425,6 +431,9 @@ impl ScenarioFile {
         }
         if let Some(clip) = &self.terrain.clip {
             check_polygon(&f("terrain.clip"), clip)?;
+        }
+        if let Some(level) = &self.terrain.level_beyond {
+            check_polygon(&f("terrain.level_beyond"), level)?;
         }
         for (i, b) in self.barriers.iter().enumerate() {
             let field = f(&format!("barriers[{i}]"));

@@ -210,8 +210,19 @@ fn declared_effects_are_checked_against_the_model() {
 
 #[test]
 fn the_shipped_tschamut_settings_parse() {
-    let names = ["calibrate", "kfold", "kfold_w1", "vegetation", "spread", "spread_loop", "combined", "combined_clip"]
-        .map(|n| format!("tschamut_{n}"));
+    let names = [
+        "calibrate",
+        "kfold",
+        "kfold_w1",
+        "vegetation",
+        "spread",
+        "spread_loop",
+        "combined",
+        "combined_clip",
+        "combined_level",
+        "combined_level_loop",
+    ]
+    .map(|n| format!("tschamut_{n}"));
     for name in &names {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("examples/{name}.toml"));
         let cfg = CalibrationConfig::read(&path).unwrap();
@@ -221,6 +232,7 @@ fn the_shipped_tschamut_settings_parse() {
         assert_eq!(spread.bounds().is_some(), frees_spread, "{name}: {spread:?}");
         assert_eq!(cfg.objective == Objective::CrpsW1Groups, name.starts_with("tschamut_combined"), "{name}");
         assert_eq!(cfg.terrain.clip.is_some(), name == "tschamut_combined_clip", "{name}");
+        assert_eq!(cfg.terrain.level_beyond.is_some(), name.starts_with("tschamut_combined_level"), "{name}");
     }
 }
 

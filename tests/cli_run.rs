@@ -193,13 +193,26 @@ fn with_terrain(dir: &Path, file: &str, body: &[u8]) -> PathBuf {
     sc
 }
 
-/// The scenario with `clip` under [terrain].
-fn clipped(dir: &Path, clip: &str) -> PathBuf {
+/// The scenario with `key = value` under [terrain].
+fn with_terrain_key(dir: &Path, key: &str, value: &str) -> PathBuf {
     let sc = scenario(dir, "", 0.3, "300.0");
     let text =
-        std::fs::read_to_string(&sc).unwrap().replace("crs_epsg = 2056", &format!("crs_epsg = 2056\nclip = {clip}"));
+        std::fs::read_to_string(&sc).unwrap().replace("crs_epsg = 2056", &format!("crs_epsg = 2056\n{key} = {value}"));
     std::fs::write(&sc, text).unwrap();
     sc
+}
+
+/// The scenario with `clip` under [terrain].
+fn clipped(dir: &Path, clip: &str) -> PathBuf {
+    with_terrain_key(dir, "clip", clip)
+}
+
+/// Runs `sc` and returns the rows of its `endpoints.csv`.
+fn endpoint_rows(sc: &Path, out: &Path) -> Vec<Vec<String>> {
+    let o = talus().args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(out.join("endpoints.csv")).unwrap();
+    csv.lines().skip(1).map(|l| l.split(',').map(str::to_string).collect()).collect()
 }
 
 #[test]
@@ -210,17 +223,40 @@ fn a_clipped_terrain_ends_where_the_clip_polygon_does() {
         dir.path(),
         "[[500000.0, 5000000.0], [500030.0, 5000000.0], [500030.0, 5000040.0], [500000.0, 5000040.0]]",
     );
-    let out = dir.path().join("out");
-    let o = talus().args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let csv = std::fs::read_to_string(out.join("endpoints.csv")).unwrap();
-    let rows: Vec<Vec<&str>> = csv.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    let rows = endpoint_rows(&sc, &dir.path().join("out"));
     assert_eq!(rows.len(), 24);
     for r in &rows {
         let x: f64 = r[7].parse().unwrap();
         assert!(x < 500032.0, "rock ends at x = {x}, past the clip");
         assert_eq!(r[10], "left_terrain", "{r:?}");
     }
+}
+
+#[test]
+fn ground_levelled_beyond_a_polygon_continues_at_the_height_of_its_edge() {
+    // Only the upper 20 m of the 35° slope are kept as they are; every node past x = 20 m takes the height of the
+    // last node inside (x = 19 m: 100 + 21 tan 35° = 114.70 m), so the rocks stop on a level terrace there instead
+    // of reaching the floor at 100 m.
+    let dir = tempfile::tempdir().unwrap();
+    let sc = with_terrain_key(
+        dir.path(),
+        "level_beyond",
+        "[[500000.0, 5000000.0], [500020.0, 5000000.0], [500020.0, 5000040.0], [500000.0, 5000040.0]]",
+    );
+    let rows = endpoint_rows(&sc, &dir.path().join("out"));
+    assert_eq!(rows.len(), 24);
+    let terrace_m = 100.0 + 21.0 * 35f64.to_radians().tan();
+    let mut stopped = 0;
+    for r in &rows {
+        let (x, z): (f64, f64) = (r[7].parse().unwrap(), r[9].parse().unwrap());
+        // None reaches the floor (a rock may leave the 40 m wide terrain sideways on the terrace).
+        assert!(z > terrace_m - 0.5, "rock ends at z = {z}, below the terrace: {r:?}");
+        if r[10] == "stopped" {
+            stopped += 1;
+            assert!(x > 500019.0 && z < terrace_m + 1.5, "rock stopped off the terrace: {r:?}");
+        }
+    }
+    assert!(stopped >= 18, "{stopped} of 24 rocks stopped");
 }
 
 #[test]
@@ -249,6 +285,10 @@ fn bad_input_is_answered_with_where_what_and_how() {
     // A clip polygon of two vertices, and one that misses the terrain.
     fails_cleanly(d, &clipped(d, "[[0.0, 0.0], [1.0, 1.0]]"), &["terrain.clip", "2 vertices"]);
     fails_cleanly(d, &clipped(d, "[[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]"), &["terrain.clip", "no triangle"]);
+    // The same for the polygon beyond which the ground is levelled.
+    let level = |poly: &str| with_terrain_key(d, "level_beyond", poly);
+    fails_cleanly(d, &level("[[0.0, 0.0], [1.0, 1.0]]"), &["terrain.level_beyond", "2 vertices"]);
+    fails_cleanly(d, &level("[[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]"), &["terrain.level_beyond", "no vertex"]);
     // Cr of 1.5.
     fails_cleanly(d, &scenario(d, "", 1.5, "300.0"), &["materials.default.cr", "1.5"]);
     // A negative mass.

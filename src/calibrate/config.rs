@@ -162,6 +162,9 @@ pub struct TerrainMap {
     pub zones: Vec<ZoneSpec>,
     /// Keep only the terrain inside this polygon (see [`crate::scenario::TerrainSpec::clip`]).
     pub clip: Option<Vec<[f64; 2]>>,
+    /// Continue the ground inside this polygon level past its edge (see
+    /// [`crate::scenario::TerrainSpec::level_beyond`]).
+    pub level_beyond: Option<Vec<[f64; 2]>>,
 }
 
 /// The objective the population fit minimises.
@@ -423,6 +426,9 @@ impl CalibrationConfig {
         }
         if let Some(clip) = &self.terrain.clip {
             crate::scenario::check_polygon(&f("terrain.clip"), clip)?;
+        }
+        if let Some(level) = &self.terrain.level_beyond {
+            crate::scenario::check_polygon(&f("terrain.level_beyond"), level)?;
         }
         let e = &self.effects;
         let in_range = (0.0..1.0).contains(&e.min_improvement)

@@ -80,6 +80,7 @@ impl Model3d {
             material_names: map.material_names.clone(),
             zones: map.zones.clone(),
             clip: map.clip.clone(),
+            level_beyond: map.level_beyond.clone(),
         };
         let terrain = crate::terrain::build::build_terrain(
             &[terrain_file.to_path_buf()],

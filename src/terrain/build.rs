@@ -6,6 +6,7 @@ use crate::error::{Error, Result};
 use crate::io::MeshData;
 use crate::raster::{Crs, Grid};
 use crate::scenario::{MaterialsBy, TerrainSpec};
+use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 
@@ -172,6 +173,16 @@ pub fn assemble_terrain(
             });
         }
     }
+    if let Some(level) = &spec.level_beyond {
+        let poly: Vec<[f64; 2]> = level.iter().map(|p| horizontal_to_local(up, &origin, *p)).collect();
+        if !level_beyond(&mut vertices, &poly) {
+            return Err(Error::invalid(
+                format!("{}: terrain.level_beyond", scenario.display()),
+                "no vertex of the terrain lies inside the polygon",
+                "give the polygon in the terrain files' horizontal coordinates, around the ground you trust",
+            ));
+        }
+    }
     if let Some(clip) = &spec.clip {
         let poly: Vec<[f64; 2]> = clip.iter().map(|p| horizontal_to_local(up, &origin, *p)).collect();
         (triangles, names) = triangles
@@ -262,7 +273,44 @@ pub fn assemble_terrain(
     Ok(terrain)
 }
 
+/// Gives every vertex outside `poly` the height of the nearest vertex inside it (horizontal distance, a kiddo k-d
+/// tree): nearest-neighbour extrapolation of the ground inside, level along the polygon's normal (ours; the
+/// alternative to a DEM's own extrapolated margin). False when no vertex lies inside.
+fn level_beyond(vertices: &mut [Vector3<f64>], poly: &[[f64; 2]]) -> bool {
+    let (inside, outside): (Vec<usize>, Vec<usize>) =
+        (0..vertices.len()).partition(|&i| point_in_polygon(vertices[i].x, vertices[i].y, poly));
+    let points: Vec<[f64; 2]> = inside.iter().map(|&i| [vertices[i].x, vertices[i].y]).collect();
+    if points.is_empty() {
+        return false;
+    }
+    let Ok(tree) = ImmutableKdTree::<f64, 2>::new_from_slice(&points) else { return false };
+    for i in outside {
+        let nearest = tree.query(&[vertices[i].x, vertices[i].y]).nearest_one::<SquaredEuclidean<f64>>().execute();
+        vertices[i].z = vertices[inside[nearest.item as usize]].z;
+    }
+    true
+}
+
 /// The centre of triangle `tri` of `vertices`.
 fn centre(vertices: &[Vector3<f64>], tri: &[u32; 3]) -> Vector3<f64> {
     tri.iter().fold(Vector3::zeros(), |acc, &k| acc + vertices[k as usize]) / 3.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nodes_outside_take_the_height_of_the_nearest_node_inside() {
+        // A 3 × 2 grid of nodes 1 m apart; the polygon holds the left column only.
+        let mut v: Vec<Vector3<f64>> =
+            [(0.0, 0.0, 5.0), (1.0, 0.0, 4.0), (2.0, 0.0, 3.0), (0.0, 1.0, 7.0), (1.0, 1.0, 6.0), (2.0, 1.0, 1.0)]
+                .iter()
+                .map(|&(x, y, z)| Vector3::new(x, y, z))
+                .collect();
+        assert!(level_beyond(&mut v, &[[-0.5, -0.5], [0.5, -0.5], [0.5, 1.5], [-0.5, 1.5]]));
+        let z: Vec<f64> = v.iter().map(|p| p.z).collect();
+        assert_eq!(z, [5.0, 5.0, 5.0, 7.0, 7.0, 7.0]);
+        assert!(!level_beyond(&mut v, &[[10.0, 10.0], [11.0, 10.0], [11.0, 11.0]]));
+    }
 }
