@@ -99,6 +99,7 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
     let d = &json["diagnostics"][0];
     assert!(d.get("covariate").is_some() && d.get("spearman_rho").is_some() && d.get("p_value").is_some());
     assert_eq!(json["duplicate_runs"], serde_json::json!([]), "a synthetic campaign has no duplicated record");
+    assert_eq!(json["runs_not_started"], serde_json::json!([]), "every synthetic rock starts");
     let z = &json["zone_check"];
     for k in ["deposition_excess", "deposition_p_value", "overrun_share", "overrun_p_value", "p_value"] {
         assert!(z[k].is_f64(), "zone_check lacks {k}: {z}");
@@ -394,4 +395,30 @@ fn the_zone_check_flags_simulations_that_overrun_the_field_and_not_the_true_mode
     let far = model.runs().iter().map(|r| r.rest_m[0]).fold(f64::NEG_INFINITY, f64::max);
     let band = wrong.regions.last().unwrap();
     assert!(matches!(band, Region::Interval([a, b]) if *a <= far && *b >= far - 5.0 && b - a <= 20.0), "{band:?}");
+}
+
+#[test]
+fn a_tschamut_run_released_at_rest_on_a_gentle_bench_is_reported_as_not_started() {
+    // v086 starts at 0.02 m/s on the proxy's 13° release bench: no rock with a friction angle above 13° leaves it,
+    // while the field rock (pushed off) ran 94 m. v041 (0.01 m/s on 44°) does start.
+    use talus::calibrate::model::evaluate;
+    use talus::calibrate::runs::runs_not_started;
+    use talus::calibrate::synthetic::material_params_3d;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/tschamut2014");
+    let model = talus::calibrate::open_model(
+        &dir,
+        &dir.join("terrain_proxy.asc"),
+        ModelKind::Rigid3d,
+        &CalibrationConfig::default(),
+        "test",
+    )
+    .unwrap();
+    let runs = model.runs();
+    let which: Vec<usize> = ["v041", "v086"].iter().map(|id| runs.iter().position(|r| &r.id == id).unwrap()).collect();
+    let c = talus::calibrate::params::Candidate {
+        params: material_params_3d("default", [0.25, 0.1, 36.0, 17.5]),
+        ..Default::default()
+    };
+    let sims = evaluate(model.as_ref(), &c, &which, 5, 1, 0).unwrap();
+    assert_eq!(runs_not_started(runs, &sims), vec!["v086".to_string()]);
 }

@@ -153,6 +153,15 @@ pub fn calibrate(
             if hold.is_empty() { Vec::new() } else { ctx.sims(&final_c, hold, cfg.repeats)? },
         )
     };
+    let mut not_started = runs::runs_not_started(runs, &base_cal);
+    not_started.extend(runs::runs_not_started(runs, &base_hold));
+    for id in &not_started {
+        log(&format!(
+            "warning: run {id}: every baseline simulation ends within {} m of its release; the field rock ran \
+             farther (check its release state and the terrain there)",
+            runs::NOT_STARTED_M
+        ));
+    }
     let (_, diag_final) = diagnose::diagnose(model, &final_cal, cfg.effects.permutations, cfg.seed);
     let diag_base = lp
         .diagnostics
@@ -182,6 +191,7 @@ pub fn calibrate(
         split: split.into(),
         release_groups,
         duplicate_runs: runs::duplicate_runs(runs),
+        runs_not_started: not_started,
         baseline: report::Stage::new(
             baseline.params.clone(),
             labels(&baseline),

@@ -97,6 +97,10 @@ pub struct Report {
     /// Pairs of runs that are the same record ([`super::runs::duplicate_runs`]).
     #[serde(default)]
     pub duplicate_runs: Vec<[String; 2]>,
+    /// Runs whose baseline simulations all end at their release while the field rock ran
+    /// ([`super::runs::runs_not_started`]).
+    #[serde(default)]
+    pub runs_not_started: Vec<String>,
     /// The calibrated model without added effects.
     pub baseline: Stage,
     /// The model after the effects loop.
@@ -459,6 +463,15 @@ pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
             s,
             "**Duplicate record:** runs {a} and {b} have the same release state and rest point; both are used (the \
              run weighs twice), always on the same side of a split or fold.\n"
+        );
+    }
+    for id in &r.runs_not_started {
+        let _ = writeln!(
+            s,
+            "**Run not started:** every baseline simulation of {id} ends within {} m of its release while the field \
+             rock ran farther; its error comes from the release state or the terrain at the release, not from the \
+             parameters.\n",
+            super::runs::NOT_STARTED_M
         );
     }
     let _ = writeln!(s, "## Errors\n");

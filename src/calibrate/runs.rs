@@ -159,6 +159,24 @@ pub fn same_record(a: &FieldRun, b: &FieldRun) -> bool {
         && same(&a.rest_m, &b.rest_m)
 }
 
+/// A simulated rock that ends within this horizontal distance of its release has not started, m (ours).
+pub const NOT_STARTED_M: f64 = 1.0;
+
+/// The runs of `sims` whose simulations all end within [`NOT_STARTED_M`] of the release while the field rock ran
+/// farther: the model cannot start the rock from its recorded state (at rest on ground gentler than the friction
+/// angle, for a block pushed off by hand, or terrain that is wrong at the release). Their error is the release's,
+/// not the parameters'; they are reported, not removed (ours).
+pub fn runs_not_started(runs: &[FieldRun], sims: &[super::model::RunSims]) -> Vec<String> {
+    sims.iter()
+        .filter(|s| {
+            !s.sims.is_empty()
+                && runs[s.run].runout_m > NOT_STARTED_M
+                && s.sims.iter().all(|x| x.runout_m < NOT_STARTED_M)
+        })
+        .map(|s| runs[s.run].id.clone())
+        .collect()
+}
+
 /// Pairs of runs that are the same record ([`same_record`]), by `trajectory_id`.
 pub fn duplicate_runs(runs: &[FieldRun]) -> Vec<[String; 2]> {
     let mut out = Vec::new();
