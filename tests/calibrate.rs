@@ -400,7 +400,7 @@ fn the_zone_check_flags_simulations_that_overrun_the_field_and_not_the_true_mode
 #[test]
 fn a_tschamut_run_released_at_rest_on_a_gentle_bench_is_reported_as_not_started() {
     // v086 starts at 0.02 m/s on the proxy's 13° release bench: no rock with a friction angle above 13° leaves it,
-    // while the field rock (pushed off) ran 94 m. v041 (0.01 m/s on 44°) does start.
+    // while the field rock ran 94 m (pushed, or the bench is not the ground there). v041 (0.01 m/s on 44°) starts.
     use talus::calibrate::model::evaluate;
     use talus::calibrate::runs::runs_not_started;
     use talus::calibrate::synthetic::material_params_3d;

@@ -173,9 +173,10 @@ pub fn assemble_terrain(
             });
         }
     }
+    let to_local =
+        |poly: &[[f64; 2]]| -> Vec<[f64; 2]> { poly.iter().map(|p| horizontal_to_local(up, &origin, *p)).collect() };
     if let Some(level) = &spec.level_beyond {
-        let poly: Vec<[f64; 2]> = level.iter().map(|p| horizontal_to_local(up, &origin, *p)).collect();
-        if !level_beyond(&mut vertices, &poly) {
+        if !level_beyond(&mut vertices, &to_local(level)) {
             return Err(Error::invalid(
                 format!("{}: terrain.level_beyond", scenario.display()),
                 "no vertex of the terrain lies inside the polygon",
@@ -184,7 +185,7 @@ pub fn assemble_terrain(
         }
     }
     if let Some(clip) = &spec.clip {
-        let poly: Vec<[f64; 2]> = clip.iter().map(|p| horizontal_to_local(up, &origin, *p)).collect();
+        let poly = to_local(clip);
         (triangles, names) = triangles
             .into_iter()
             .zip(names)
@@ -252,7 +253,7 @@ pub fn assemble_terrain(
     }
     for zone in &spec.zones {
         let m = index_of(&zone.material).unwrap_or(0) as u16;
-        let poly: Vec<[f64; 2]> = zone.polygon.iter().map(|p| horizontal_to_local(up, &origin, *p)).collect();
+        let poly = to_local(&zone.polygon);
         for (t, tri) in triangles.iter().enumerate() {
             let c = centre(&vertices, tri);
             if point_in_polygon(c.x, c.y, &poly) {
