@@ -47,6 +47,37 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
     assert!(c.report.effects_added.is_empty(), "{:?}", c.report.effects_added);
 }
 
+#[test]
+fn several_searches_keep_the_one_best_on_fresh_numbers() {
+    let model =
+        synthetic_2d(&Synthetic2d { seed: 4, runs_per_group: 6, ..Default::default() }, Options2d::default()).unwrap();
+    let mut cfg = config_2d();
+    cfg.max_evaluations = Some(40);
+    cfg.effects.max_rounds = 0;
+    cfg.back_analysis.enabled = false;
+    let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+    let one = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report;
+    assert!(one.population_fit["searches"].as_array().unwrap().is_empty());
+    cfg.search_starts = 3;
+    let dir = tempfile::tempdir().unwrap();
+    let three = calibrate(&model, &cfg, &cal, &hold, "seeded", Some(dir.path()), &quiet).unwrap().report;
+    let searches: Vec<talus::calibrate::fit::SearchRecord> =
+        serde_json::from_value(three.population_fit["searches"].clone()).unwrap();
+    assert_eq!(searches.iter().map(|s| s.seed).collect::<Vec<_>>(), [cfg.seed, cfg.seed + 1, cfg.seed + 2]);
+    // The first search is the single search of before: same numbers, same budget, same result.
+    let first = &searches[0];
+    assert_eq!(first.evaluations, one.population_fit["evaluations"].as_u64().unwrap() as usize);
+    assert_eq!(first.objective_m, one.population_fit["objective_m"].as_f64().unwrap());
+    // The baseline is the search with the lowest objective on the fresh numbers, whatever its own numbers said.
+    let best = searches.iter().min_by(|a, b| a.selection_objective_m.total_cmp(&b.selection_objective_m)).unwrap();
+    for (name, v) in &best.parameters {
+        assert_eq!(three.baseline.parameters.get(name), Some(*v), "{name}");
+    }
+    assert!(searches.iter().all(|s| s.selection_objective_m.is_finite() && s.evaluations <= 40));
+    let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(md.contains("ran 3 searches"), "{md}");
+}
+
 /// Tiny settings for the 3DRB tests (the engine runs in a debug build here).
 fn tiny_3d() -> CalibrationConfig {
     let mut cfg = CalibrationConfig {
@@ -222,6 +253,7 @@ fn the_shipped_tschamut_settings_parse() {
         "combined_clip",
         "combined_level",
         "combined_level_loop",
+        "combined_level_starts",
     ]
     .map(|n| format!("tschamut_{n}"));
     for name in &names {
@@ -234,6 +266,7 @@ fn the_shipped_tschamut_settings_parse() {
         assert_eq!(cfg.objective == Objective::CrpsW1Groups, name.starts_with("tschamut_combined"), "{name}");
         assert_eq!(cfg.terrain.clip.is_some(), name == "tschamut_combined_clip", "{name}");
         assert_eq!(cfg.terrain.level_beyond.is_some(), name.starts_with("tschamut_combined_level"), "{name}");
+        assert_eq!(cfg.search_starts, if name.ends_with("starts") { 2 } else { 1 }, "{name}");
     }
 }
 

@@ -5,6 +5,7 @@
 //! seed = 1
 //! repeats = 20              # simulations per run for the reported metrics
 //! search_repeats = 4        # per run inside the optimiser (common random numbers)
+//! search_starts = 1         # population-fit searches on different numbers, the best on fresh ones kept
 //! holdout_fraction = 0.2    # seeded split when no --holdout file is given
 //! inner_folds = 5           # nested cross-validation of the effects loop
 //! outer_folds = 5           # talus calibrate --kfold without a number
@@ -268,6 +269,9 @@ pub struct CalibrationConfig {
     /// Simulations per run inside the optimiser and the effects loop (default 4). Common random numbers make the
     /// comparison of candidates fair with few repeats; the objectives pool all repeats of a group.
     pub search_repeats: usize,
+    /// Searches of the population fit, each on its own random numbers; the one best on fresh numbers is kept
+    /// (default 1; see [`super::fit::fit_population`]). Each costs a full fit.
+    pub search_starts: usize,
     /// Share of runs held out by the seeded split when no hold-out file is given (default 0.2).
     pub holdout_fraction: f64,
     /// Folds of the nested cross-validation inside the calibration runs (default 5).
@@ -302,6 +306,7 @@ impl Default for CalibrationConfig {
             seed: 1,
             repeats: 20,
             search_repeats: 4,
+            search_starts: 1,
             holdout_fraction: 0.2,
             inner_folds: 5,
             outer_folds: 5,
@@ -318,6 +323,9 @@ impl Default for CalibrationConfig {
         }
     }
 }
+
+/// Most population-fit searches: search k uses the streams of `seed + k`, which must stay clear of the selection's.
+const MAX_SEARCH_STARTS: usize = 10;
 
 /// Optimiser budgets when the settings leave them out, as (population fit, refit after an effect, each fold's
 /// refit) objective evaluations (ours): a 3DRB evaluation simulates every calibration run `search_repeats` times,
@@ -394,6 +402,13 @@ impl CalibrationConfig {
                 f("search_repeats"),
                 format!("must be in [1, repeats = {}], got {}", self.repeats, self.search_repeats),
                 "use for example 4",
+            ));
+        }
+        if !(1..=MAX_SEARCH_STARTS).contains(&self.search_starts) {
+            return Err(Error::invalid(
+                f("search_starts"),
+                format!("must be in [1, {MAX_SEARCH_STARTS}], got {}", self.search_starts),
+                "use 1 (one search) or 2-3 where the fit depends on its random numbers",
             ));
         }
         if !(self.holdout_fraction > 0.0 && self.holdout_fraction < 0.9) {
@@ -590,6 +605,8 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("simulation.effects"), "{e}");
+        let e = CalibrationConfig::from_toml_str("search_starts = 0\n", "c.toml").unwrap_err().to_string();
+        assert!(e.contains("c.toml: search_starts") && e.contains("got 0"), "{e}");
         let e = cfg.check_materials(ModelKind::Rigid3d, &["rock".into()], "c.toml").unwrap_err().to_string();
         assert!(e.contains("materials.default"), "{e}");
     }

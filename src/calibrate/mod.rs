@@ -134,7 +134,7 @@ pub fn calibrate(
     let runs = model.runs();
     let (start, free) = base_candidate(model, cfg);
     log(&format!("population fit of {} free parameters on {} runs", free.len(), cal.len()));
-    let (baseline, search) = fit::fit(&ctx, &start, &free, cal, cfg.max_evaluations(model.kind()), "population fit");
+    let (baseline, search, searches) = fit::fit_population(&ctx, &start, &free, cal);
     let t_fit = t0.elapsed().as_secs_f64();
     let back =
         if cfg.back_analysis.enabled { backanalysis::back_analyse(&ctx, &baseline, &free, cal) } else { Vec::new() };
@@ -216,6 +216,7 @@ pub fn calibrate(
             "evaluations": search.evaluations,
             "free_parameters": free,
             "history_m": search.history,
+            "searches": searches,
         }),
         timing: report::Timing {
             population_fit_s: t_fit,

@@ -498,6 +498,28 @@ pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
         let g = |p: &Params| p.get(n).map(|v| format!("{v:.4}")).unwrap_or_else(|| "–".into());
         let _ = writeln!(s, "| {n} | {} | {} |", g(&r.baseline.parameters), g(&r.final_stage.parameters));
     }
+    let searches: Vec<super::fit::SearchRecord> =
+        serde_json::from_value(r.population_fit["searches"].clone()).unwrap_or_default();
+    if !searches.is_empty() {
+        let _ = writeln!(s, "\nThe population fit ran {} searches, each on its own random numbers; the one with the lowest objective on fresh numbers is the baseline.\n", searches.len());
+        let _ = writeln!(
+            s,
+            "| search seed | objective on its numbers, m | on fresh numbers, m | evaluations | parameters |"
+        );
+        let _ = writeln!(s, "|---|---|---|---|---|");
+        for x in &searches {
+            let p: Vec<String> = x.parameters.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
+            let _ = writeln!(
+                s,
+                "| {} | {:.2} | {:.2} | {} | {} |",
+                x.seed,
+                x.objective_m,
+                x.selection_objective_m,
+                x.evaluations,
+                p.join(", ")
+            );
+        }
+    }
     if !r.back_analysis.is_empty() {
         let _ = writeln!(s, "\n## Per-run back-analysis (mean ± sd over calibration runs)\n");
         let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds.\n");
