@@ -71,20 +71,9 @@ pub fn with_unit(start: &Candidate, free: &[FreeParam], u: &[f64]) -> Candidate 
     c
 }
 
-/// Fits `free` (starting from their values in `start`) on runs `which` within `max_evaluations`. Returns the best
-/// candidate and the search record.
+/// Fits `free` (starting from their values in `start`) on runs `which` within `max_evaluations`, with the common
+/// random numbers of `seed`. Returns the best candidate and the search record.
 pub fn fit(
-    ctx: &Context,
-    start: &Candidate,
-    free: &[FreeParam],
-    which: &[usize],
-    max_evaluations: usize,
-    what: &str,
-) -> (Candidate, SearchResult) {
-    search(ctx, start, free, which, max_evaluations, what, ctx.cfg.seed)
-}
-
-fn search(
     ctx: &Context,
     start: &Candidate,
     free: &[FreeParam],
@@ -145,7 +134,7 @@ pub fn fit_population(
     let budget = ctx.cfg.max_evaluations(ctx.model.kind());
     let starts = ctx.cfg.search_starts.max(1);
     if starts == 1 {
-        let (c, s) = fit(ctx, start, free, which, budget, "population fit");
+        let (c, s) = fit(ctx, start, free, which, budget, "population fit", ctx.cfg.seed);
         return (c, s, Vec::new());
     }
     let selection_seed = ctx.cfg.seed.wrapping_add(SELECTION_SEED_OFFSET);
@@ -154,7 +143,7 @@ pub fn fit_population(
     for k in 0..starts {
         let seed = ctx.cfg.seed.wrapping_add(k as u64);
         let what = format!("population fit, search {}/{starts}", k + 1);
-        let (c, s) = search(ctx, start, free, which, budget, &what, seed);
+        let (c, s) = fit(ctx, start, free, which, budget, &what, seed);
         let selection = ctx.objective_seeded(&c, which, ctx.cfg.repeats, selection_seed);
         (ctx.log)(&format!("{what}: objective {:.2} m on its numbers, {selection:.2} m on fresh ones", s.f));
         records.push(SearchRecord {

@@ -325,8 +325,15 @@ pub fn effects_loop(
         let start = folded(kind, model, &chosen);
         let def = definition(kind, spec.kind).expect("effect defined for the model");
         (ctx.log)(&format!("effects loop, round {round}: keeping {}, refitting", spec.label));
-        let (refit, _) =
-            fit(ctx, &start, &refit_free, cal, cfg.refit_evaluations(kind), &format!("refit with {}", spec.label));
+        let (refit, _) = fit(
+            ctx,
+            &start,
+            &refit_free,
+            cal,
+            cfg.refit_evaluations(kind),
+            &format!("refit with {}", spec.label),
+            cfg.seed,
+        );
         current = refit;
         free = refit_free;
         let parameters: BTreeMap<String, f64> = current
@@ -428,6 +435,7 @@ fn refit_cv(
                 &train,
                 ctx.cfg.cv_refit_evaluations(ctx.model.kind()),
                 &format!("{what}, fold {}", f + 1),
+                ctx.cfg.seed,
             )
             .0
         };
