@@ -3,7 +3,7 @@
 //! and the observed run-outs' sd within a release group. For looking at what a parameter or an effect does to each
 //! block without a calibration. The last column is the share of simulations that run farther than every observed
 //! run of their release group (the zone check's overrun share; about 1/(n+1) for a group of n runs if the model
-//! were right).
+//! were right); `stalled` is the share of simulations that end within 1 m of their release.
 //!
 //! The column `edge` gives the share of runs ending below y = 135 m, observed / simulated: within 5 m of the lower
 //! edge of the proxy's LPS data (y = 130 m) or past it. With `--terrain-of SETTINGS` the proxy is modified as the
@@ -59,7 +59,7 @@ fn main() {
     let all: Vec<usize> = (0..model.runs().len()).collect();
     let sims = evaluate(model.as_ref(), &c, &all, REPEATS, 1, 0).unwrap();
     println!(
-        "block  runs  observed m  simulated m  bias m  MAE m  floor m  W1 m  coverage  90% width m  obs sd in group m  overrun  edge obs/sim"
+        "block  runs  observed m  simulated m  bias m  MAE m  floor m  W1 m  coverage  90% width m  obs sd in group m  overrun  edge obs/sim  stalled"
     );
     for block in ["1", "2", "4"] {
         let s: Vec<_> = sims.iter().filter(|s| model.runs()[s.run].block_id == block).cloned().collect();
@@ -82,10 +82,11 @@ fn main() {
         let edge_obs = s.iter().filter(|r| near_edge(model.runs()[r.run].rest_m[1])).count() as f64 / s.len() as f64;
         let sims_all: Vec<_> = s.iter().flat_map(|r| &r.sims).collect();
         let edge_sim = sims_all.iter().filter(|x| near_edge(x.rest_m[1])).count() as f64 / sims_all.len() as f64;
+        let stalled = sims_all.iter().filter(|x| x.runout_m < 1.0).count() as f64 / sims_all.len() as f64;
         let n_groups = groups.len() as f64;
         let sd = (within.iter().map(|d| d * d).sum::<f64>() / (within.len() as f64 - n_groups).max(1.0)).sqrt();
         println!(
-            "{block:>5}  {:>4}  {:>10.1}  {:>11.1}  {:>+6.1}  {:>5.1}  {:>7.1}  {:>4.1}  {:>8.2}  {width:>11.1}  {sd:>17.1}  {:>7.3}  {edge_obs:.2}/{edge_sim:.2}",
+            "{block:>5}  {:>4}  {:>10.1}  {:>11.1}  {:>+6.1}  {:>5.1}  {:>7.1}  {:>4.1}  {:>8.2}  {width:>11.1}  {sd:>17.1}  {:>7.3}  {edge_obs:.2}/{edge_sim:.2}  {stalled:>7.3}",
             m.runs,
             m.observed_mean_m,
             m.simulated_mean_m,

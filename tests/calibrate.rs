@@ -131,6 +131,7 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
     assert!(d.get("covariate").is_some() && d.get("spearman_rho").is_some() && d.get("p_value").is_some());
     assert_eq!(json["duplicate_runs"], serde_json::json!([]), "a synthetic campaign has no duplicated record");
     assert_eq!(json["runs_not_started"], serde_json::json!([]), "every synthetic rock starts");
+    assert!(json["runs_stalling"].is_array(), "report.json lacks runs_stalling");
     let z = &json["zone_check"];
     for k in ["deposition_excess", "deposition_p_value", "overrun_share", "overrun_p_value", "p_value"] {
         assert!(z[k].is_f64(), "zone_check lacks {k}: {z}");
@@ -153,6 +154,46 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
 
 /// Calibrates the synthetic profile case `name` ([`case_2d`]: its effect switched on but undeclared) with the
 /// default settings.
+#[test]
+fn kfold_holds_every_run_out_once_and_pools_the_folds() {
+    let model =
+        synthetic_2d(&Synthetic2d { seed: 5, runs_per_group: 4, ..Default::default() }, Options2d::default()).unwrap();
+    let mut cfg = config_2d();
+    cfg.effects.max_rounds = 0;
+    cfg.max_evaluations = Some(40);
+    let out = tempfile::tempdir().unwrap();
+    let cv = talus::calibrate::cross_validate(&model, &cfg, 3, out.path(), &quiet).unwrap();
+    let mut held: Vec<&String> = cv.folds.iter().flat_map(|f| &f.holdout_ids).collect();
+    held.sort();
+    let mut all: Vec<&String> = model.runs().iter().map(|r| &r.id).collect();
+    all.sort();
+    assert_eq!(held, all, "every run is held out exactly once");
+    assert_eq!(cv.baseline.overall.runs, model.runs().len());
+    let weighted: f64 =
+        cv.folds.iter().map(|f| f.baseline_holdout.runout_mae_m * f.holdout_ids.len() as f64).sum::<f64>()
+            / model.runs().len() as f64;
+    assert!((cv.baseline.overall.runout_mae_m - weighted).abs() < 1e-9, "the pooled MAE is the runs' mean");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.path().join("cv_report.json")).unwrap()).unwrap();
+    assert!(json["folds"][0]["holdout_stalling"].is_array());
+    let md = std::fs::read_to_string(out.path().join("cv_report.md")).unwrap();
+    assert!(md.contains("held-out runs stalling") && md.contains("| 3 |"), "{md}");
+    for f in 1..=3 {
+        assert!(out.path().join(format!("fold_{f}/report.json")).exists());
+    }
+    // Repeated with seeds 1 and 2: the first repeat is the study above, and the summary is their mean and sd.
+    cfg.outer_repeats = 2;
+    let rep = talus::calibrate::repeated_cross_validation(&model, &cfg, 3, out.path(), &quiet).unwrap();
+    assert_eq!(rep.seeds, vec![1, 2]);
+    let mae = rep.summary.iter().find(|m| m.runs == "all" && m.metric == "runout_mae_m").unwrap();
+    assert_eq!(mae.values[0], cv.final_set.overall.runout_mae_m, "repeat 1 reproduces the single k-fold");
+    assert_ne!(mae.values[0], mae.values[1], "repeat 2 has other folds and numbers");
+    let spread = (mae.values[0] - mae.values[1]).abs() / std::f64::consts::SQRT_2;
+    assert!((mae.mean - (mae.values[0] + mae.values[1]) / 2.0).abs() < 1e-12 && (mae.sd - spread).abs() < 1e-9);
+    assert!(rep.summary.iter().any(|m| m.runs.starts_with("block ")), "per block as well");
+    assert!(out.path().join("repeat_2/fold_3/report.json").exists() && out.path().join("cv_repeats.md").exists());
+}
+
 fn profile_case(name: &str, seed: u64) -> talus::calibrate::report::Report {
     let cfg = CalibrationConfig::default();
     let model = synthetic_2d(&case_2d(name, seed).unwrap(), Options2d::default()).unwrap();
@@ -388,6 +429,15 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     assert_eq!(json["model"], "2dlm");
     assert_eq!(json["holdout_ids"], serde_json::json!(["p001", "p010", "p019"]));
     assert!(out.join("report.md").is_file() && out.join("residual_map.svg").is_file());
+    // A repeated k-fold: a summary of mean ± sd over the seeds 1 and 2, each repeat in its own folder.
+    std::fs::write(d.join("settings.toml"), "max_evaluations = 20\nouter_repeats = 2\n[effects]\nmax_rounds = 0\n")
+        .unwrap();
+    let cv = d.join("cv");
+    let o = run(&["--kfold", "2", "--out", cv.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("runout_mae_m"));
+    let md = std::fs::read_to_string(cv.join("cv_repeats.md")).unwrap();
+    assert!(md.contains("| seed 1 | seed 2 | mean ± sd |") && cv.join("repeat_2/cv_report.json").is_file(), "{md}");
     // An id that is not in the campaign: exit 2, and the message names the file and line.
     std::fs::write(d.join("bad.txt"), "p001\nnope\n").unwrap();
     let o = run(&["--holdout", d.join("bad.txt").to_str().unwrap(), "--out", out.to_str().unwrap()]);
@@ -430,6 +480,19 @@ fn the_zone_check_flags_simulations_that_overrun_the_field_and_not_the_true_mode
     assert!(matches!(band, Region::Interval([a, b]) if *a <= far && *b >= far - 5.0 && b - a <= 20.0), "{band:?}");
 }
 
+/// The Tschamut campaign on its terrain proxy, default settings.
+fn tschamut() -> Box<dyn Model> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/tschamut2014");
+    talus::calibrate::open_model(
+        &dir,
+        &dir.join("terrain_proxy.asc"),
+        ModelKind::Rigid3d,
+        &CalibrationConfig::default(),
+        "test",
+    )
+    .unwrap()
+}
+
 #[test]
 fn a_tschamut_run_released_at_rest_on_a_gentle_bench_is_reported_as_not_started() {
     // v086 starts at 0.02 m/s on the proxy's 13° release bench: no rock with a friction angle above 13° leaves it,
@@ -437,15 +500,7 @@ fn a_tschamut_run_released_at_rest_on_a_gentle_bench_is_reported_as_not_started(
     use talus::calibrate::model::evaluate;
     use talus::calibrate::runs::runs_not_started;
     use talus::calibrate::synthetic::material_params_3d;
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/tschamut2014");
-    let model = talus::calibrate::open_model(
-        &dir,
-        &dir.join("terrain_proxy.asc"),
-        ModelKind::Rigid3d,
-        &CalibrationConfig::default(),
-        "test",
-    )
-    .unwrap();
+    let model = tschamut();
     let runs = model.runs();
     let which: Vec<usize> = ["v041", "v086"].iter().map(|id| runs.iter().position(|r| &r.id == id).unwrap()).collect();
     let c = talus::calibrate::params::Candidate {
@@ -454,4 +509,32 @@ fn a_tschamut_run_released_at_rest_on_a_gentle_bench_is_reported_as_not_started(
     };
     let sims = evaluate(model.as_ref(), &c, &which, 5, 1, 0).unwrap();
     assert_eq!(runs_not_started(runs, &sims), vec!["v086".to_string()]);
+}
+
+#[test]
+fn a_slow_release_that_stalls_in_part_under_high_static_friction_is_reported_as_stalling() {
+    // v083 leaves the upper release bench at 1.0 m/s. Under static friction 57° and Cr 0.09 (the parameters a
+    // seed-2 k-fold fitted in its fold 1) many of its simulations stop at the release, so its median flips with the
+    // share; under 36° and Cr 0.25 (a seed-1 fold) it runs. Both field rocks ran about 100 m.
+    use talus::calibrate::model::evaluate;
+    use talus::calibrate::runs::{runs_not_started, runs_stalling, stalled_share, STALLING_SHARE};
+    use talus::calibrate::synthetic::material_params_3d;
+    let model = tschamut();
+    let runs = model.runs();
+    let which = vec![runs.iter().position(|r| r.id == "v083").unwrap()];
+    let share = |p: [f64; 4]| {
+        let c = talus::calibrate::params::Candidate { params: material_params_3d("default", p), ..Default::default() };
+        let sims = evaluate(model.as_ref(), &c, &which, 20, 1, 0).unwrap();
+        let listed = runs_stalling(runs, &sims, "holdout");
+        assert!(runs_not_started(runs, &sims).is_empty());
+        (stalled_share(&sims[0]), listed)
+    };
+    let (high, listed) = share([0.091, 0.078, 57.3, 20.5]);
+    eprintln!("stalled share at 57°: {high}");
+    assert!(high >= 0.25, "{high}");
+    assert_eq!(listed.len(), 1);
+    assert_eq!((listed[0].trajectory_id.as_str(), listed[0].set.as_str()), ("v083", "holdout"));
+    let (low, listed) = share([0.25, 0.1, 36.0, 17.5]);
+    eprintln!("stalled share at 36°: {low}");
+    assert!(low < STALLING_SHARE && listed.is_empty(), "{low}");
 }

@@ -9,6 +9,7 @@
 //! holdout_fraction = 0.2    # seeded split when no --holdout file is given
 //! inner_folds = 5           # nested cross-validation of the effects loop
 //! outer_folds = 5           # talus calibrate --kfold without a number
+//! outer_repeats = 1         # --kfold repeated with seeds seed, seed+1, ... (the spread of its estimate)
 //!
 //! [materials.default]       # 3DRB: a number fixes a parameter, [min, max] frees it
 //! cr_mean = [0.02, 0.8]
@@ -278,6 +279,9 @@ pub struct CalibrationConfig {
     pub inner_folds: usize,
     /// Folds of `--kfold` when no number is given (default 5).
     pub outer_folds: usize,
+    /// Repeats of `--kfold` with seeds `seed`, `seed + 1`, ... (each its own folds and random numbers), summarised
+    /// as mean ± sd (default 1).
+    pub outer_repeats: usize,
     /// Runs of one block whose release points chain within this distance form one release group, m (default 20).
     pub group_link_m: f64,
     /// What the population fit minimises (default `crps`).
@@ -310,6 +314,7 @@ impl Default for CalibrationConfig {
             holdout_fraction: 0.2,
             inner_folds: 5,
             outer_folds: 5,
+            outer_repeats: 1,
             group_link_m: 20.0,
             objective: Objective::default(),
             max_evaluations: None,
@@ -326,6 +331,8 @@ impl Default for CalibrationConfig {
 
 /// Most population-fit searches: search k uses the streams of `seed + k`, which must stay clear of the selection's.
 const MAX_SEARCH_STARTS: usize = 10;
+/// Most repeats of the outer k-fold cross-validation.
+const MAX_OUTER_REPEATS: usize = 10;
 
 /// Optimiser budgets when the settings leave them out, as (population fit, refit after an effect, each fold's
 /// refit) objective evaluations (ours): a 3DRB evaluation simulates every calibration run `search_repeats` times,
@@ -416,6 +423,13 @@ impl CalibrationConfig {
                 f("holdout_fraction"),
                 format!("must be in (0, 0.9), got {}", self.holdout_fraction),
                 "use for example 0.2",
+            ));
+        }
+        if !(1..=MAX_OUTER_REPEATS).contains(&self.outer_repeats) {
+            return Err(Error::invalid(
+                f("outer_repeats"),
+                format!("must be in [1, {MAX_OUTER_REPEATS}], got {}", self.outer_repeats),
+                "use 1, or 3 to see how much the k-fold figures depend on the seed (each repeat costs a k-fold)",
             ));
         }
         if self.inner_folds < 2 || self.outer_folds < 2 {
@@ -607,6 +621,8 @@ mod tests {
         assert!(e.contains("simulation.effects"), "{e}");
         let e = CalibrationConfig::from_toml_str("search_starts = 0\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: search_starts") && e.contains("got 0"), "{e}");
+        let e = CalibrationConfig::from_toml_str("outer_repeats = 11\n", "c.toml").unwrap_err().to_string();
+        assert!(e.contains("c.toml: outer_repeats") && e.contains("got 11"), "{e}");
         let e = cfg.check_materials(ModelKind::Rigid3d, &["rock".into()], "c.toml").unwrap_err().to_string();
         assert!(e.contains("materials.default"), "{e}");
     }

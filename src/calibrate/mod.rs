@@ -10,11 +10,13 @@
 //!    their signature ([`effects`]), kept only when nested cross-validation shows a clear improvement.
 //! 5. **Report** ([`report`]): the five metrics ([`metrics`]) of the baseline and the final model on both sets,
 //!    with the scatter floor, parameters, diagnostics, plots and maps.
+//! 6. **Cross-validation** ([`crossval`]): every run held out once (`--kfold`), repeated over seeds.
 //!
 //! [`synthetic`] makes campaigns with talus itself, with an effect switched on, to check that the loop finds it.
 
 pub mod backanalysis;
 pub mod config;
+pub mod crossval;
 pub mod diagnose;
 pub mod effects;
 #[path = "loop.rs"]
@@ -36,6 +38,7 @@ pub mod synthetic;
 pub mod zone;
 
 pub use config::{CalibrationConfig, ModelKind};
+pub use crossval::{cross_validate, repeated_cross_validation, CrossValidation, RepeatedCrossValidation};
 pub use metrics::{Metrics, MetricsSet};
 pub use model::{Model, RunSims};
 pub use report::Report;
@@ -45,7 +48,6 @@ use crate::error::{Error, Result};
 use fit::Context;
 use metrics::metrics_set;
 use params::{Candidate, FreeParam, Params};
-use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Instant;
 
@@ -153,6 +155,8 @@ pub fn calibrate(
             if hold.is_empty() { Vec::new() } else { ctx.sims(&final_c, hold, cfg.repeats)? },
         )
     };
+    let mut stalling = runs::runs_stalling(runs, &base_cal, "calibration");
+    stalling.extend(runs::runs_stalling(runs, &base_hold, "holdout"));
     let mut not_started = runs::runs_not_started(runs, &base_cal);
     not_started.extend(runs::runs_not_started(runs, &base_hold));
     for id in &not_started {
@@ -192,6 +196,7 @@ pub fn calibrate(
         release_groups,
         duplicate_runs: runs::duplicate_runs(runs),
         runs_not_started: not_started,
+        runs_stalling: stalling,
         baseline: report::Stage::new(
             baseline.params.clone(),
             labels(&baseline),
@@ -236,144 +241,4 @@ pub fn calibrate(
         report::write_report(dir, &report, model, &base_cal, &final_cal, &base_hold, &final_hold, Some(&zc))?;
     }
     Ok(Calibration { report, baseline_holdout: base_hold, final_holdout: final_hold })
-}
-
-/// One fold of an outer cross-validation.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct FoldSummary {
-    /// Fold index.
-    pub fold: usize,
-    /// Held-out ids.
-    pub holdout_ids: Vec<String>,
-    /// Effects kept.
-    pub effects_added: Vec<String>,
-    /// Baseline held-out metrics.
-    pub baseline_holdout: Metrics,
-    /// Final held-out metrics.
-    pub final_holdout: Metrics,
-    /// Wall time, s.
-    pub time_s: f64,
-}
-
-/// An outer k-fold cross-validation over all runs: every run is held out once.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct CrossValidation {
-    /// `3drb` or `2dlm`.
-    pub model: String,
-    /// Folds.
-    pub k: usize,
-    /// Per fold.
-    pub folds: Vec<FoldSummary>,
-    /// Held-out metrics pooled over all folds (every run predicted by the fold that did not see it): baseline.
-    pub baseline: MetricsSet,
-    /// The same for the final models.
-    #[serde(rename = "final")]
-    pub final_set: MetricsSet,
-    /// Wall time, s.
-    pub total_s: f64,
-}
-
-/// Runs [`calibrate`] `k` times, each fold held out once, writing each fold's report to `out/fold_i/` and the
-/// pooled summary to `out/cv_report.json` and `out/cv_report.md`.
-pub fn cross_validate(
-    model: &dyn Model,
-    cfg: &CalibrationConfig,
-    k: usize,
-    out: &Path,
-    log: &(dyn Fn(&str) + Sync),
-) -> Result<CrossValidation> {
-    let t0 = Instant::now();
-    let runs = model.runs();
-    let all: Vec<usize> = (0..runs.len()).collect();
-    let fold_of = split::folds(runs, &all, k, cfg.seed, 100);
-    let mut folds = Vec::new();
-    let (mut base_pool, mut final_pool) = (Vec::new(), Vec::new());
-    for f in 0..k {
-        let t = Instant::now();
-        let hold: Vec<usize> = all.iter().copied().filter(|&i| fold_of[i] == f).collect();
-        let cal: Vec<usize> = all.iter().copied().filter(|&i| fold_of[i] != f).collect();
-        log(&format!("fold {}/{k}: {} calibration runs, {} held out", f + 1, cal.len(), hold.len()));
-        let dir = out.join(format!("fold_{}", f + 1));
-        // The folds measure held-out errors; the back-analysis table comes from a single calibration.
-        let mut fold_cfg = cfg.clone();
-        fold_cfg.back_analysis.enabled = false;
-        let cfg = &fold_cfg;
-        let c = calibrate(
-            model,
-            cfg,
-            &cal,
-            &hold,
-            &format!("outer {k}-fold cross-validation, fold {} (seed {})", f + 1, cfg.seed),
-            Some(&dir),
-            log,
-        )?;
-        folds.push(FoldSummary {
-            fold: f + 1,
-            holdout_ids: c.report.holdout_ids.clone(),
-            effects_added: c.report.effects_added.iter().map(|e| e.label.clone()).collect(),
-            baseline_holdout: c.report.baseline.holdout,
-            final_holdout: c.report.final_stage.holdout,
-            time_s: t.elapsed().as_secs_f64(),
-        });
-        base_pool.extend(c.baseline_holdout);
-        final_pool.extend(c.final_holdout);
-    }
-    let cv = CrossValidation {
-        model: model.kind().as_str().into(),
-        k,
-        folds,
-        baseline: metrics_set(runs, &base_pool),
-        final_set: metrics_set(runs, &final_pool),
-        total_s: t0.elapsed().as_secs_f64(),
-    };
-    let json = serde_json::to_string_pretty(&cv)
-        .map_err(|e| Error::invalid("cv_report.json", e.to_string(), "this is a bug: please report it"))?;
-    crate::io::write_bytes_atomic(&out.join("cv_report.json"), json.as_bytes())?;
-    crate::io::write_bytes_atomic(&out.join("cv_report.md"), cv_markdown(&cv).as_bytes())?;
-    Ok(cv)
-}
-
-fn cv_markdown(cv: &CrossValidation) -> String {
-    use std::fmt::Write as _;
-    let mut s = String::new();
-    let _ = writeln!(s, "# Outer {}-fold cross-validation ({})\n", cv.k, cv.model);
-    let _ = writeln!(s, "Every run predicted once by the fold that did not see it; {:.0} s in all.\n", cv.total_s);
-    let _ = writeln!(
-        s,
-        "| model, runs | n | runout_mae_m | runout_w1_m | coverage_90 | runout_bias_m | endpoint_mae_m | floor |"
-    );
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
-    let row = |s: &mut String, l: &str, m: &Metrics| {
-        let _ = writeln!(
-            s,
-            "| {l} | {} | {:.2} | {:.2} | {:.2} | {:+.2} | {:.2} | {:.2} |",
-            m.runs,
-            m.runout_mae_m,
-            m.runout_w1_m,
-            m.coverage_90,
-            m.runout_bias_m,
-            m.endpoint_mae_m,
-            m.scatter_floor_mae_m
-        );
-    };
-    for (name, set) in [("baseline", &cv.baseline), ("final", &cv.final_set)] {
-        row(&mut s, name, &set.overall);
-        for (b, m) in &set.by_block {
-            row(&mut s, &format!("{name}, block {b}"), m);
-        }
-    }
-    let _ = writeln!(s, "\n| fold | effects kept | baseline MAE | final MAE | time (s) |");
-    let _ = writeln!(s, "|---|---|---|---|---|");
-    for f in &cv.folds {
-        let _ = writeln!(
-            s,
-            "| {} | {} | {:.2} | {:.2} | {:.0} |",
-            f.fold,
-            f.effects_added.join(", "),
-            f.baseline_holdout.runout_mae_m,
-            f.final_holdout.runout_mae_m,
-            f.time_s
-        );
-    }
-    s
 }

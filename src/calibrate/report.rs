@@ -101,6 +101,10 @@ pub struct Report {
     /// ([`super::runs::runs_not_started`]).
     #[serde(default)]
     pub runs_not_started: Vec<String>,
+    /// Runs whose baseline simulations stall in [`super::runs::STALLING_SHARE`] or more of the repeats
+    /// ([`super::runs::runs_stalling`]).
+    #[serde(default)]
+    pub runs_stalling: Vec<super::runs::StallingRun>,
     /// The calibrated model without added effects.
     pub baseline: Stage,
     /// The model after the effects loop.
@@ -362,7 +366,7 @@ fn write_runs_csv(
     let cov = covariates(model, &all_base);
     crate::io::write_atomic(path, |w| {
         let io = |e| Error::io(path, e);
-        write!(w, "trajectory_id,set,block_id,group,observed_runout_m,baseline_median_m,baseline_p05_m,baseline_p95_m,final_median_m,final_p05_m,final_p95_m,final_residual_m").map_err(io)?;
+        write!(w, "trajectory_id,set,block_id,group,observed_runout_m,baseline_median_m,baseline_p05_m,baseline_p95_m,final_median_m,final_p05_m,final_p95_m,final_residual_m,baseline_stalled_share").map_err(io)?;
         for n in &cov.names {
             write!(w, ",{n}").map_err(io)?;
         }
@@ -372,7 +376,7 @@ fn write_runs_csv(
             let set = if k < base_cal.len() { "calibration" } else { "holdout" };
             write!(
                 w,
-                "{},{set},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3}",
+                "{},{set},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.2}",
                 r.id,
                 r.block_id,
                 model.group_names()[r.group],
@@ -383,7 +387,8 @@ fn write_runs_csv(
                 f.median_runout(),
                 f.runout_quantile(0.05),
                 f.runout_quantile(0.95),
-                r.runout_m - f.median_runout()
+                r.runout_m - f.median_runout(),
+                super::runs::stalled_share(b)
             )
             .map_err(io)?;
             for c in &cov.values {
@@ -471,6 +476,20 @@ pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
             "**Run not started:** every baseline simulation of {id} ends within {} m of its release while the field \
              rock ran farther; its error comes from the release state or the terrain at the release, not from the \
              parameters.\n",
+            super::runs::NOT_STARTED_M
+        );
+    }
+    if !r.runs_stalling.is_empty() {
+        let _ = writeln!(
+            s,
+            "**Runs that stall in part:** {} (share of baseline simulations ending within {} m of the release; each \
+             field rock ran farther). In the model these runs either stop where released or run the slope, so their \
+             median run-out, and the run-out MAE and coverage with it, flip as the share crosses one half.\n",
+            r.runs_stalling
+                .iter()
+                .map(|x| format!("{} ({}, {:.2})", x.trajectory_id, x.set, x.stalled_share))
+                .collect::<Vec<_>>()
+                .join(", "),
             super::runs::NOT_STARTED_M
         );
     }

@@ -7,8 +7,10 @@
 //! The scatter floor and the group-wise objective compare a run only with its repeats, because runs of other blocks
 //! or from elsewhere are not repeats of it.
 
+use super::model::RunSims;
 use crate::campaign::Campaign;
 use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// One observed run.
@@ -162,19 +164,47 @@ pub fn same_record(a: &FieldRun, b: &FieldRun) -> bool {
 /// A simulated rock that ends within this horizontal distance of its release has not started, m (ours).
 pub const NOT_STARTED_M: f64 = 1.0;
 
+/// A run's simulations stall in this share or more: its median is near a flip (ours: 2 of 20 repeats).
+pub const STALLING_SHARE: f64 = 0.1;
+
+/// The share of a run's simulations that end within [`NOT_STARTED_M`] of the release.
+pub fn stalled_share(s: &RunSims) -> f64 {
+    if s.sims.is_empty() {
+        return 0.0;
+    }
+    s.sims.iter().filter(|x| x.runout_m < NOT_STARTED_M).count() as f64 / s.sims.len() as f64
+}
+
+/// A run some of whose simulations stall at the release while the field rock ran.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StallingRun {
+    /// The run.
+    pub trajectory_id: String,
+    /// `calibration` or `holdout`.
+    pub set: String,
+    /// Share of its simulations that end within [`NOT_STARTED_M`] of the release.
+    pub stalled_share: f64,
+}
+
+/// The runs of `sims` (of the set `set`) whose field rock ran farther than [`NOT_STARTED_M`] and whose simulations
+/// stall in [`STALLING_SHARE`] or more of the repeats. Such a run's outcome is two-valued in the model (the rock stops
+/// where it was released or runs the slope), so its median, and the run-out MAE and coverage with it, flip when the
+/// share crosses one half; a slow release on gentle ground under a high static friction does this (ours).
+pub fn runs_stalling(runs: &[FieldRun], sims: &[RunSims], set: &str) -> Vec<StallingRun> {
+    sims.iter()
+        .filter(|s| runs[s.run].runout_m > NOT_STARTED_M)
+        .map(|s| (s, stalled_share(s)))
+        .filter(|&(_, share)| share >= STALLING_SHARE)
+        .map(|(s, share)| StallingRun { trajectory_id: runs[s.run].id.clone(), set: set.into(), stalled_share: share })
+        .collect()
+}
+
 /// The runs of `sims` whose simulations all end within [`NOT_STARTED_M`] of the release while the field rock ran
 /// farther: the model cannot start the rock from its recorded state (at rest on ground gentler than the friction
 /// angle, for a block pushed off by hand, or terrain that is wrong at the release). Their error is the release's,
 /// not the parameters'; they are reported, not removed (ours).
-pub fn runs_not_started(runs: &[FieldRun], sims: &[super::model::RunSims]) -> Vec<String> {
-    sims.iter()
-        .filter(|s| {
-            !s.sims.is_empty()
-                && runs[s.run].runout_m > NOT_STARTED_M
-                && s.sims.iter().all(|x| x.runout_m < NOT_STARTED_M)
-        })
-        .map(|s| runs[s.run].id.clone())
-        .collect()
+pub fn runs_not_started(runs: &[FieldRun], sims: &[RunSims]) -> Vec<String> {
+    runs_stalling(runs, sims, "").into_iter().filter(|r| r.stalled_share == 1.0).map(|r| r.trajectory_id).collect()
 }
 
 /// Pairs of runs that are the same record ([`same_record`]), by `trajectory_id`.

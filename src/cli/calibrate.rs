@@ -9,7 +9,8 @@ use talus::calibrate::{self, split, CalibrationConfig, ModelKind};
 /// Calibrate a model on a field campaign, measure it on held-out runs, and add the effects it lacks.
 ///
 /// Writes DIR/report.json, DIR/report.md, charts and residual maps. With --kfold, runs an outer k-fold
-/// cross-validation over all runs instead (DIR/fold_i/ and DIR/cv_report.json).
+/// cross-validation over all runs instead (DIR/fold_i/ and DIR/cv_report.json); with --kfold-repeats R > 1, R of
+/// them with seeds seed, seed+1, ... (DIR/repeat_r/ and DIR/cv_repeats.json).
 ///
 /// Example:
 ///   talus calibrate meshes/tschamut2014 --terrain meshes/tschamut2014/terrain_proxy.asc --model 3drb
@@ -45,6 +46,9 @@ pub struct CalibrateArgs {
     /// Outer k-fold cross-validation over all runs (K folds; `--kfold` alone uses outer_folds from the settings).
     #[arg(long, num_args = 0..=1, default_missing_value = "0")]
     kfold: Option<usize>,
+    /// Repeat the k-fold study R times with seeds seed, seed+1, ... and report mean ± sd (overrides outer_repeats).
+    #[arg(long, requires = "kfold")]
+    kfold_repeats: Option<usize>,
 }
 
 pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
@@ -58,6 +62,9 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     }
     if let Some(r) = a.repeats {
         cfg.repeats = r;
+    }
+    if let Some(r) = a.kfold_repeats {
+        cfg.outer_repeats = r;
     }
     if let Some(t) = a.threads {
         if t == 0 {
@@ -82,6 +89,18 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         let k = if k == 0 { cfg.outer_folds } else { k };
         if k < 2 || k > runs.len() {
             anyhow::bail!("--kfold: must be between 2 and the number of runs ({})", runs.len());
+        }
+        if cfg.outer_repeats > 1 {
+            let r = calibrate::repeated_cross_validation(model.as_ref(), &cfg, k, &a.out, &log)?;
+            println!(
+                "outer {k}-fold cross-validation repeated with seeds {:?} in {:.0} s; held-out, mean ± sd:",
+                r.seeds, r.total_s
+            );
+            for m in r.summary.iter().filter(|m| m.runs == "all") {
+                println!("  {} {:.2} ± {:.2}", m.metric, m.mean, m.sd);
+            }
+            println!("wrote {}", a.out.join("cv_repeats.md").display());
+            return Ok(());
         }
         let cv = calibrate::cross_validate(model.as_ref(), &cfg, k, &a.out, &log)?;
         let (b, f) = (&cv.baseline.overall, &cv.final_set.overall);

@@ -1,0 +1,288 @@
+//! Outer k-fold cross-validation over all runs (`talus calibrate --kfold`): every run held out once by a
+//! [`calibrate`] that did not see it, the held-out errors pooled; and the study repeated over seeds.
+
+use super::metrics::{metrics_set, Metrics, MetricsSet};
+use super::{calibrate, runs, split, stats, CalibrationConfig, Model};
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+use std::time::Instant;
+
+/// One fold of an outer cross-validation.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct FoldSummary {
+    /// Fold index.
+    pub fold: usize,
+    /// Held-out ids.
+    pub holdout_ids: Vec<String>,
+    /// Effects kept.
+    pub effects_added: Vec<String>,
+    /// Baseline held-out metrics.
+    pub baseline_holdout: Metrics,
+    /// Final held-out metrics.
+    pub final_holdout: Metrics,
+    /// Held-out runs whose baseline simulations stall in part ([`runs::runs_stalling`]).
+    #[serde(default)]
+    pub holdout_stalling: Vec<runs::StallingRun>,
+    /// Wall time, s.
+    pub time_s: f64,
+}
+
+/// An outer k-fold cross-validation over all runs: every run is held out once.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct CrossValidation {
+    /// `3drb` or `2dlm`.
+    pub model: String,
+    /// Folds.
+    pub k: usize,
+    /// Per fold.
+    pub folds: Vec<FoldSummary>,
+    /// Held-out metrics pooled over all folds (every run predicted by the fold that did not see it): baseline.
+    pub baseline: MetricsSet,
+    /// The same for the final models.
+    #[serde(rename = "final")]
+    pub final_set: MetricsSet,
+    /// Wall time, s.
+    pub total_s: f64,
+}
+
+/// Runs [`calibrate`] `k` times, each fold held out once, writing each fold's report to `out/fold_i/` and the
+/// pooled summary to `out/cv_report.json` and `out/cv_report.md`.
+pub fn cross_validate(
+    model: &dyn Model,
+    cfg: &CalibrationConfig,
+    k: usize,
+    out: &Path,
+    log: &(dyn Fn(&str) + Sync),
+) -> Result<CrossValidation> {
+    let t0 = Instant::now();
+    let runs = model.runs();
+    let all: Vec<usize> = (0..runs.len()).collect();
+    let fold_of = split::folds(runs, &all, k, cfg.seed, 100);
+    let mut folds = Vec::new();
+    let (mut base_pool, mut final_pool) = (Vec::new(), Vec::new());
+    for f in 0..k {
+        let t = Instant::now();
+        let hold: Vec<usize> = all.iter().copied().filter(|&i| fold_of[i] == f).collect();
+        let cal: Vec<usize> = all.iter().copied().filter(|&i| fold_of[i] != f).collect();
+        log(&format!("fold {}/{k}: {} calibration runs, {} held out", f + 1, cal.len(), hold.len()));
+        let dir = out.join(format!("fold_{}", f + 1));
+        // The folds measure held-out errors; the back-analysis table comes from a single calibration.
+        let mut fold_cfg = cfg.clone();
+        fold_cfg.back_analysis.enabled = false;
+        let cfg = &fold_cfg;
+        let c = calibrate(
+            model,
+            cfg,
+            &cal,
+            &hold,
+            &format!("outer {k}-fold cross-validation, fold {} (seed {})", f + 1, cfg.seed),
+            Some(&dir),
+            log,
+        )?;
+        folds.push(FoldSummary {
+            fold: f + 1,
+            holdout_ids: c.report.holdout_ids.clone(),
+            effects_added: c.report.effects_added.iter().map(|e| e.label.clone()).collect(),
+            baseline_holdout: c.report.baseline.holdout,
+            final_holdout: c.report.final_stage.holdout,
+            holdout_stalling: c.report.runs_stalling.iter().filter(|r| r.set == "holdout").cloned().collect(),
+            time_s: t.elapsed().as_secs_f64(),
+        });
+        base_pool.extend(c.baseline_holdout);
+        final_pool.extend(c.final_holdout);
+    }
+    let cv = CrossValidation {
+        model: model.kind().as_str().into(),
+        k,
+        folds,
+        baseline: metrics_set(runs, &base_pool),
+        final_set: metrics_set(runs, &final_pool),
+        total_s: t0.elapsed().as_secs_f64(),
+    };
+    write_study(out, "cv_report", &cv, &cv_markdown(&cv))?;
+    Ok(cv)
+}
+
+/// One held-out metric across the repeats of a k-fold cross-validation.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct MetricSpread {
+    /// `all` or `block ID`.
+    pub runs: String,
+    /// A [`Metrics`] name, e.g. `runout_mae_m`.
+    pub metric: String,
+    /// Per repeat, pooled over its folds (final models).
+    pub values: Vec<f64>,
+    /// Their mean.
+    pub mean: f64,
+    /// Their sample standard deviation (0 for one repeat).
+    pub sd: f64,
+}
+
+/// An outer k-fold cross-validation repeated with seeds `seed`, `seed + 1`, ...: other folds and other random
+/// numbers each time, so the spread shows how much one k-fold estimate is a draw (repeated k-fold
+/// cross-validation, Kim 2009, Comput. Stat. Data Anal. 53:3735).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct RepeatedCrossValidation {
+    /// `3drb` or `2dlm`.
+    pub model: String,
+    /// Folds of each repeat.
+    pub k: usize,
+    /// Seed of each repeat.
+    pub seeds: Vec<u64>,
+    /// Mean ± sd of the held-out metrics over the repeats.
+    pub summary: Vec<MetricSpread>,
+    /// Each repeat.
+    pub repeats: Vec<CrossValidation>,
+    /// Wall time, s.
+    pub total_s: f64,
+}
+
+/// Runs [`cross_validate`] `cfg.outer_repeats` times, repeat r (from 0) with seed `cfg.seed + r` into
+/// `out/repeat_{r+1}/`, and writes the spread to `out/cv_repeats.json` and `out/cv_repeats.md`.
+pub fn repeated_cross_validation(
+    model: &dyn Model,
+    cfg: &CalibrationConfig,
+    k: usize,
+    out: &Path,
+    log: &(dyn Fn(&str) + Sync),
+) -> Result<RepeatedCrossValidation> {
+    let t0 = Instant::now();
+    let mut repeats = Vec::new();
+    let seeds: Vec<u64> = (0..cfg.outer_repeats as u64).map(|r| cfg.seed.wrapping_add(r)).collect();
+    for (r, &seed) in seeds.iter().enumerate() {
+        log(&format!("repeat {}/{} of the {k}-fold cross-validation, seed {seed}", r + 1, seeds.len()));
+        let cfg = CalibrationConfig { seed, ..cfg.clone() };
+        repeats.push(cross_validate(model, &cfg, k, &out.join(format!("repeat_{}", r + 1)), log)?);
+    }
+    let mut summary = Vec::new();
+    let blocks: Vec<String> = repeats[0].final_set.by_block.keys().cloned().collect();
+    for scope in std::iter::once(None).chain(blocks.iter().map(Some)) {
+        let per_repeat: Vec<[(&str, f64); 6]> = repeats
+            .iter()
+            .map(|cv| spread_metrics(scope.map_or(&cv.final_set.overall, |b| &cv.final_set.by_block[b])))
+            .collect();
+        for (i, (metric, _)) in per_repeat[0].iter().enumerate() {
+            let values: Vec<f64> = per_repeat.iter().map(|m| m[i].1).collect();
+            let (mean, sd) = (stats::mean(&values), stats::sample_sd(&values));
+            let runs = scope.map_or("all".to_string(), |b| format!("block {b}"));
+            summary.push(MetricSpread { runs, metric: metric.to_string(), values, mean, sd });
+        }
+    }
+    let rcv = RepeatedCrossValidation {
+        model: model.kind().as_str().into(),
+        k,
+        seeds,
+        summary,
+        repeats,
+        total_s: t0.elapsed().as_secs_f64(),
+    };
+    write_study(out, "cv_repeats", &rcv, &repeats_markdown(&rcv))?;
+    Ok(rcv)
+}
+
+/// Writes `out/STEM.json` and `out/STEM.md`.
+fn write_study(out: &Path, stem: &str, study: &impl Serialize, markdown: &str) -> Result<()> {
+    let json = serde_json::to_string_pretty(study)
+        .map_err(|e| Error::invalid(format!("{stem}.json"), e.to_string(), "this is a bug: please report it"))?;
+    crate::io::write_bytes_atomic(&out.join(format!("{stem}.json")), json.as_bytes())?;
+    crate::io::write_bytes_atomic(&out.join(format!("{stem}.md")), markdown.as_bytes())
+}
+
+/// The metrics whose spread [`repeated_cross_validation`] reports.
+fn spread_metrics(m: &Metrics) -> [(&'static str, f64); 6] {
+    [
+        ("runout_mae_m", m.runout_mae_m),
+        ("runout_w1_m", m.runout_w1_m),
+        ("coverage_90", m.coverage_90),
+        ("runout_bias_m", m.runout_bias_m),
+        ("endpoint_mae_m", m.endpoint_mae_m),
+        ("scatter_floor_mae_m", m.scatter_floor_mae_m),
+    ]
+}
+
+fn repeats_markdown(r: &RepeatedCrossValidation) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let seeds: Vec<String> = r.seeds.iter().map(|x| x.to_string()).collect();
+    let _ = writeln!(
+        s,
+        "# Outer {}-fold cross-validation repeated {} times ({})
+",
+        r.k,
+        r.seeds.len(),
+        r.model
+    );
+    let _ = writeln!(
+        s,
+        "Seeds {} (each repeat its own folds and random numbers; its report in `repeat_N/`); held-out metrics of \
+         the final models pooled over each repeat's folds; {:.0} s in all.\n",
+        seeds.join(", "),
+        r.total_s
+    );
+    let _ = writeln!(
+        s,
+        "| runs | metric | {} | mean ± sd |",
+        seeds.iter().map(|x| format!("seed {x}")).collect::<Vec<_>>().join(" | ")
+    );
+    let _ = writeln!(s, "|---|---|{}---|", "---|".repeat(seeds.len()));
+    for m in &r.summary {
+        let values: Vec<String> = m.values.iter().map(|v| format!("{v:.2}")).collect();
+        let _ = writeln!(s, "| {} | {} | {} | {:.2} ± {:.2} |", m.runs, m.metric, values.join(" | "), m.mean, m.sd);
+    }
+    s
+}
+
+/// `v083 (0.55), v093 (0.60)`.
+fn stalling_list(runs: &[runs::StallingRun]) -> String {
+    runs.iter().map(|r| format!("{} ({:.2})", r.trajectory_id, r.stalled_share)).collect::<Vec<_>>().join(", ")
+}
+
+fn cv_markdown(cv: &CrossValidation) -> String {
+    use std::fmt::Write as _;
+    let mut s = String::new();
+    let _ = writeln!(s, "# Outer {}-fold cross-validation ({})\n", cv.k, cv.model);
+    let _ = writeln!(s, "Every run predicted once by the fold that did not see it; {:.0} s in all.\n", cv.total_s);
+    let _ = writeln!(
+        s,
+        "| model, runs | n | runout_mae_m | runout_w1_m | coverage_90 | runout_bias_m | endpoint_mae_m | floor |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
+    let row = |s: &mut String, l: &str, m: &Metrics| {
+        let _ = writeln!(
+            s,
+            "| {l} | {} | {:.2} | {:.2} | {:.2} | {:+.2} | {:.2} | {:.2} |",
+            m.runs,
+            m.runout_mae_m,
+            m.runout_w1_m,
+            m.coverage_90,
+            m.runout_bias_m,
+            m.endpoint_mae_m,
+            m.scatter_floor_mae_m
+        );
+    };
+    for (name, set) in [("baseline", &cv.baseline), ("final", &cv.final_set)] {
+        row(&mut s, name, &set.overall);
+        for (b, m) in &set.by_block {
+            row(&mut s, &format!("{name}, block {b}"), m);
+        }
+    }
+    let _ = writeln!(
+        s,
+        "\n| fold | effects kept | baseline MAE | final MAE | held-out runs stalling (share of simulations) | time (s) |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|");
+    for f in &cv.folds {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.2} | {:.2} | {} | {:.0} |",
+            f.fold,
+            f.effects_added.join(", "),
+            f.baseline_holdout.runout_mae_m,
+            f.final_holdout.runout_mae_m,
+            stalling_list(&f.holdout_stalling),
+            f.time_s
+        );
+    }
+    s
+}
