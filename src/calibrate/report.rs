@@ -482,9 +482,9 @@ pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
     if !r.runs_stalling.is_empty() {
         let _ = writeln!(
             s,
-            "**Runs that stall in part:** {} (share of baseline simulations ending within {} m of the release; each \
-             field rock ran farther). In the model these runs either stop where released or run the slope, so their \
-             median run-out, and the run-out MAE and coverage with it, flip as the share crosses one half.\n",
+            "**Runs that stall at the release:** {} (the share of baseline simulations ending within {} m of the \
+             release; each field rock ran farther). The others of their simulations run the slope, so the median \
+             run-out of such a run, and the run-out MAE and coverage with it, flip as the share crosses one half.\n",
             r.runs_stalling
                 .iter()
                 .map(|x| format!("{} ({}, {:.2})", x.trajectory_id, x.set, x.stalled_share))
