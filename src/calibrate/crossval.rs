@@ -21,7 +21,7 @@ pub struct FoldSummary {
     pub baseline_holdout: Metrics,
     /// Final held-out metrics.
     pub final_holdout: Metrics,
-    /// Held-out runs whose baseline simulations stall in part ([`runs::runs_stalling`]).
+    /// Held-out runs whose baseline simulations stall at the release ([`runs::runs_stalling`]).
     #[serde(default)]
     pub holdout_stalling: Vec<runs::StallingRun>,
     /// Wall time, s.

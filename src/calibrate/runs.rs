@@ -204,7 +204,10 @@ pub fn runs_stalling(runs: &[FieldRun], sims: &[RunSims], set: &str) -> Vec<Stal
 /// angle, for a block pushed off by hand, or terrain that is wrong at the release). Their error is the release's,
 /// not the parameters'; they are reported, not removed (ours).
 pub fn runs_not_started(runs: &[FieldRun], sims: &[RunSims]) -> Vec<String> {
-    runs_stalling(runs, sims, "").into_iter().filter(|r| r.stalled_share == 1.0).map(|r| r.trajectory_id).collect()
+    sims.iter()
+        .filter(|s| runs[s.run].runout_m > NOT_STARTED_M && stalled_share(s) == 1.0)
+        .map(|s| runs[s.run].id.clone())
+        .collect()
 }
 
 /// Pairs of runs that are the same record ([`same_record`]), by `trajectory_id`.
