@@ -2,9 +2,11 @@
 //! `examples/calibration_study.rs`; the figures of the full study are in docs/calibration.md).
 
 use talus::calibrate::config::{CalibrationConfig, ModelKind, Objective, ParamSetting};
+use talus::calibrate::crossval::fold_assignment;
+use talus::calibrate::fit::with_unit;
 use talus::calibrate::params::Region;
 use talus::calibrate::synthetic::{case_2d, synthetic_2d, synthetic_3d, Synthetic2d, Synthetic3d, TRUE_2D};
-use talus::calibrate::{calibrate, split, Model};
+use talus::calibrate::{base_candidate, calibrate, split, Model};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
 
@@ -295,6 +297,8 @@ fn the_shipped_tschamut_settings_parse() {
         "combined_level",
         "combined_level_loop",
         "combined_level_starts",
+        "combined_level_tied",
+        "combined_level_strata",
     ]
     .map(|n| format!("tschamut_{n}"));
     for name in &names {
@@ -308,7 +312,47 @@ fn the_shipped_tschamut_settings_parse() {
         assert_eq!(cfg.terrain.clip.is_some(), name == "tschamut_combined_clip", "{name}");
         assert_eq!(cfg.terrain.level_beyond.is_some(), name.starts_with("tschamut_combined_level"), "{name}");
         assert_eq!(cfg.search_starts, if name.ends_with("starts") { 2 } else { 1 }, "{name}");
+        let tied = cfg.used_setting(ModelKind::Rigid3d, "default", "static_friction_deg").is_none();
+        assert_eq!(tied, name.ends_with("tied"), "{name}");
+        assert_eq!(cfg.fold_link_m.is_some(), name.ends_with("strata"), "{name}");
     }
+}
+
+#[test]
+fn a_tied_static_friction_follows_the_dynamic_one() {
+    let model = synthetic_3d(&Synthetic3d::default(), SimParams::default()).unwrap();
+    let toml = "[materials.default]\nstatic_excess_deg = [5.0, 10.0]\ndynamic_friction_deg = [10.0, 40.0]\n";
+    let cfg = CalibrationConfig::from_toml_str(toml, "t.toml").unwrap();
+    cfg.check_materials(ModelKind::Rigid3d, model.materials(), "t.toml").unwrap();
+    let (start, free) = base_candidate(&model, &cfg);
+    let names: Vec<&str> = free.iter().map(|p| p.name.as_str()).collect();
+    assert!(
+        names.contains(&"default.static_excess_deg") && !names.contains(&"default.static_friction_deg"),
+        "{names:?}"
+    );
+    assert_eq!(start.params.get("default.static_friction_deg"), Some(25.0 + 7.5));
+    // Every point the optimiser visits keeps static = dynamic + excess.
+    let u: Vec<f64> = free
+        .iter()
+        .map(|p| match p.name.as_str() {
+            "default.dynamic_friction_deg" => 1.0,
+            "default.static_excess_deg" => 0.0,
+            _ => 0.5,
+        })
+        .collect();
+    let c = with_unit(&start, &free, &u);
+    assert_eq!(
+        (c.params.get("default.dynamic_friction_deg"), c.params.get("default.static_friction_deg")),
+        (Some(40.0), Some(45.0))
+    );
+    // Untied (no excess set), the static angle stays free and no excess appears.
+    let (start, free) = base_candidate(&model, &CalibrationConfig::default());
+    assert!(free.iter().any(|p| p.name == "default.static_friction_deg"));
+    assert_eq!(start.params.get("default.static_excess_deg"), None);
+    // Both set is an error naming the material.
+    let both = CalibrationConfig::from_toml_str(&format!("{toml}static_friction_deg = 40.0\n"), "t.toml").unwrap();
+    let e = both.check_materials(ModelKind::Rigid3d, model.materials(), "t.toml").unwrap_err().to_string();
+    assert!(e.contains("t.toml: materials.default") && e.contains("static_excess_deg"), "{e}");
 }
 
 #[test]
@@ -482,15 +526,37 @@ fn the_zone_check_flags_simulations_that_overrun_the_field_and_not_the_true_mode
 
 /// The Tschamut campaign on its terrain proxy, default settings.
 fn tschamut() -> Box<dyn Model> {
+    tschamut_with(&CalibrationConfig::default())
+}
+
+fn tschamut_with(cfg: &CalibrationConfig) -> Box<dyn Model> {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/tschamut2014");
-    talus::calibrate::open_model(
-        &dir,
-        &dir.join("terrain_proxy.asc"),
-        ModelKind::Rigid3d,
-        &CalibrationConfig::default(),
-        "test",
-    )
-    .unwrap()
+    talus::calibrate::open_model(&dir, &dir.join("terrain_proxy.asc"), ModelKind::Rigid3d, cfg, "test").unwrap()
+}
+
+#[test]
+fn folds_can_spread_each_release_point_over_the_folds() {
+    // Tschamut's block 2 has five runs from its upper release point; with one release group per block (100 m),
+    // seed 2 holds three of them out together, and no fold's calibration is left to say how that point behaves.
+    let mut cfg = CalibrationConfig { group_link_m: 100.0, seed: 2, ..Default::default() };
+    let model = tschamut_with(&cfg);
+    let runs = model.runs();
+    let upper: Vec<usize> = ["v032", "v083", "v086", "v090", "v093"]
+        .iter()
+        .map(|id| runs.iter().position(|r| r.id == *id).unwrap())
+        .collect();
+    let folds_of = |cfg: &CalibrationConfig| {
+        let f = fold_assignment(runs, cfg, 5);
+        let mut u: Vec<usize> = upper.iter().map(|&i| f[i]).collect();
+        u.sort();
+        u
+    };
+    assert_eq!(folds_of(&cfg), vec![0, 0, 0, 1, 3]);
+    cfg.fold_link_m = Some(20.0);
+    for seed in 1..=3 {
+        cfg.seed = seed;
+        assert_eq!(folds_of(&cfg), vec![0, 1, 2, 3, 4], "seed {seed}");
+    }
 }
 
 #[test]

@@ -63,6 +63,7 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
         for &v in &grid {
             let mut c = base.clone();
             c.params.set(p.name.clone(), v);
+            super::params::normalize(&mut c.params);
             match ctx.sims(&c, which, ctx.cfg.search_repeats) {
                 Ok(s) => medians.push(s.iter().map(|r| r.median_runout()).collect::<Vec<_>>()),
                 Err(_) => medians.push(vec![f64::NAN; which.len()]),

@@ -10,6 +10,7 @@
 //! inner_folds = 5           # nested cross-validation of the effects loop
 //! outer_folds = 5           # talus calibrate --kfold without a number
 //! outer_repeats = 1         # --kfold repeated with seeds seed, seed+1, ... (the spread of its estimate)
+//! # fold_link_m = 10.0      # --kfold spreads each release cluster of this linkage over the folds (default: groups)
 //!
 //! [materials.default]       # 3DRB: a number fixes a parameter, [min, max] frees it
 //! cr_mean = [0.02, 0.8]
@@ -17,6 +18,7 @@
 //! static_friction_deg = [10.0, 60.0]
 //! dynamic_friction_deg = { min = 5.0, max = 55.0, start = 28.0 }
 //! dynamic_friction_sd_deg = 0.0   # spread between rocks (default 0); [0, 8] frees it
+//! # static_excess_deg = [5.0, 10.0] # instead of static_friction_deg: static = dynamic + this (unset by default)
 //!
 //! [effects]
 //! candidates = ["speed_restitution", "angle_restitution", "mass_restitution", "roughness",
@@ -72,9 +74,14 @@ impl ModelKind {
     /// The calibrated parameters of one material, in report order.
     pub fn material_parameters(self) -> &'static [&'static str] {
         match self {
-            ModelKind::Rigid3d => {
-                &["cr_mean", "cr_sd", "static_friction_deg", "dynamic_friction_deg", "dynamic_friction_sd_deg"]
-            }
+            ModelKind::Rigid3d => &[
+                "cr_mean",
+                "cr_sd",
+                "static_friction_deg",
+                "dynamic_friction_deg",
+                "dynamic_friction_sd_deg",
+                STATIC_EXCESS,
+            ],
             ModelKind::Lumped2d => &["rn_mean", "rn_sd", "rt_mean", "rt_sd", "friction_angle_deg", "roughness_sd_deg"],
         }
     }
@@ -104,11 +111,15 @@ impl ModelKind {
         match name {
             "cr_mean" | "cr_sd" | "rn_mean" | "rn_sd" | "rt_mean" | "rt_sd" => (0.0, 1.0),
             "static_friction_deg" | "dynamic_friction_deg" | "friction_angle_deg" => (0.0, 89.0),
-            "roughness_sd_deg" | "dynamic_friction_sd_deg" => (0.0, 30.0),
+            "roughness_sd_deg" | "dynamic_friction_sd_deg" | STATIC_EXCESS => (0.0, 30.0),
             _ => (f64::NEG_INFINITY, f64::INFINITY),
         }
     }
 }
+
+/// Name of the 3DRB material parameter that ties the static friction angle to the dynamic one: static = dynamic
+/// + this, degrees. The seed paper's Table 2 has static friction 5° (floors) and 10° (faces) above the dynamic.
+pub const STATIC_EXCESS: &str = "static_excess_deg";
 
 /// A parameter as written: a number (fixed), `[min, max]` (free, starting mid-range) or a table.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -284,6 +295,10 @@ pub struct CalibrationConfig {
     pub outer_repeats: usize,
     /// Runs of one block whose release points chain within this distance form one release group, m (default 20).
     pub group_link_m: f64,
+    /// `--kfold` spreads the runs of each release cluster (single linkage within this distance, per block) evenly
+    /// over the folds, m (default: the release groups of `group_link_m`). A smaller distance than the groups'
+    /// keeps every release point in every fold's calibration runs.
+    pub fold_link_m: Option<f64>,
     /// What the population fit minimises (default `crps`).
     pub objective: Objective,
     /// Most objective evaluations of the population fit (default 60 for 3DRB, 300 for 2DLM).
@@ -316,6 +331,7 @@ impl Default for CalibrationConfig {
             outer_folds: 5,
             outer_repeats: 1,
             group_link_m: 20.0,
+            fold_link_m: None,
             objective: Objective::default(),
             max_evaluations: None,
             threads: 0,
@@ -435,6 +451,9 @@ impl CalibrationConfig {
         if self.inner_folds < 2 || self.outer_folds < 2 {
             return Err(Error::invalid(f("inner_folds / outer_folds"), "must be at least 2", "use for example 5"));
         }
+        if self.fold_link_m.is_some_and(|d| !(d.is_finite() && d >= 0.0)) {
+            return Err(Error::invalid(f("fold_link_m"), "must be a non-negative distance", "use for example 10"));
+        }
         if !(self.group_link_m.is_finite() && self.group_link_m >= 0.0) {
             return Err(Error::invalid(f("group_link_m"), "must be a non-negative distance", "use for example 20"));
         }
@@ -489,6 +508,18 @@ impl CalibrationConfig {
         Ok(())
     }
 
+    /// The setting of `param` of `material` for `model`, or `None` where the parameter is not used: the static
+    /// friction of a material whose `static_excess_deg` is set (it follows the dynamic one), and that excess where
+    /// it is not set.
+    pub fn used_setting(&self, model: ModelKind, material: &str, param: &str) -> Option<ParamSetting> {
+        let tied = self.materials.get(material).is_some_and(|m| m.contains_key(STATIC_EXCESS));
+        match param {
+            STATIC_EXCESS if !tied => None,
+            "static_friction_deg" if tied => None,
+            _ => Some(self.setting(model, material, param)),
+        }
+    }
+
     /// The setting of `param` of `material` for `model`: the file's, or the default.
     pub fn setting(&self, model: ModelKind, material: &str, param: &str) -> ParamSetting {
         self.materials
@@ -506,6 +537,13 @@ impl CalibrationConfig {
                     format!("{source}: materials.{m}"),
                     format!("the terrain has no material '{m}' (it has: {})", materials.join(", ")),
                     "use one of the terrain's material names (a DEM has the single material `default`)",
+                ));
+            }
+            if params.contains_key(STATIC_EXCESS) && params.contains_key("static_friction_deg") {
+                return Err(Error::invalid(
+                    format!("{source}: materials.{m}"),
+                    "sets both static_friction_deg and static_excess_deg",
+                    "keep one: static_excess_deg makes the static angle follow the dynamic one",
                 ));
             }
             for (p, s) in params {

@@ -2,6 +2,7 @@
 //! [`calibrate`] that did not see it, the held-out errors pooled; and the study repeated over seeds.
 
 use super::metrics::{metrics_set, Metrics, MetricsSet};
+use super::runs::{assign_groups, FieldRun};
 use super::{calibrate, runs, split, stats, CalibrationConfig, Model};
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -46,6 +47,20 @@ pub struct CrossValidation {
     pub total_s: f64,
 }
 
+/// The outer fold of every run: each release group's runs spread evenly over the `k` folds, or each release
+/// cluster's of `fold_link_m` where that is set (stratified k-fold; the clusters ours).
+pub fn fold_assignment(runs: &[FieldRun], cfg: &CalibrationConfig, k: usize) -> Vec<usize> {
+    let all: Vec<usize> = (0..runs.len()).collect();
+    match cfg.fold_link_m {
+        Some(link_m) => {
+            let mut clustered = runs.to_vec();
+            assign_groups(&mut clustered, link_m);
+            split::folds(&clustered, &all, k, cfg.seed, 100)
+        }
+        None => split::folds(runs, &all, k, cfg.seed, 100),
+    }
+}
+
 /// Runs [`calibrate`] `k` times, each fold held out once, writing each fold's report to `out/fold_i/` and the
 /// pooled summary to `out/cv_report.json` and `out/cv_report.md`.
 pub fn cross_validate(
@@ -58,7 +73,7 @@ pub fn cross_validate(
     let t0 = Instant::now();
     let runs = model.runs();
     let all: Vec<usize> = (0..runs.len()).collect();
-    let fold_of = split::folds(runs, &all, k, cfg.seed, 100);
+    let fold_of = fold_assignment(runs, cfg, k);
     let mut folds = Vec::new();
     let (mut base_pool, mut final_pool) = (Vec::new(), Vec::new());
     for f in 0..k {

@@ -89,7 +89,7 @@ pub fn base_candidate(model: &dyn Model, cfg: &CalibrationConfig) -> (Candidate,
     }
     for m in model.materials() {
         for p in kind.material_parameters() {
-            let s = cfg.setting(kind, m, p);
+            let Some(s) = cfg.used_setting(kind, m, p) else { continue };
             let name = format!("{m}.{p}");
             params.set(name.clone(), s.start());
             if let Some((min, max, _)) = s.bounds() {
@@ -97,6 +97,7 @@ pub fn base_candidate(model: &dyn Model, cfg: &CalibrationConfig) -> (Candidate,
             }
         }
     }
+    params::normalize(&mut params);
     (Candidate { params, effects }, free)
 }
 

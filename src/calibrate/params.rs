@@ -5,7 +5,7 @@
 //! `speed_restitution.k_mps`, `zone1.cr_mean`), and `mobility` for the global mobility factor the effects loop uses
 //! to re-centre a model (see [`apply_mobility_3d`]).
 
-use super::config::ModelKind;
+use super::config::{ModelKind, STATIC_EXCESS};
 use super::effects::EffectKind;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -133,9 +133,22 @@ impl FreeParam {
     }
 }
 
-/// Caps every dynamic friction angle at its static one (3DRB), as the engine requires, so that reported values are
-/// the values simulated.
+/// Sets every tied static friction angle to its dynamic one plus the excess (see [`STATIC_EXCESS`]), then caps every
+/// dynamic friction angle at its static one (3DRB), as the engine requires, so that reported values are the values
+/// simulated.
 pub fn normalize(params: &mut Params) {
+    let tied: Vec<(String, f64)> = params
+        .0
+        .iter()
+        .filter_map(|(k, e)| {
+            let p = k.strip_suffix(&format!(".{STATIC_EXCESS}"))?;
+            let d = params.get(&format!("{p}.dynamic_friction_deg"))?;
+            Some((format!("{p}.static_friction_deg"), (d + e).min(89.0)))
+        })
+        .collect();
+    for (k, s) in tied {
+        params.set(k, s);
+    }
     let caps: Vec<(String, f64)> = params
         .0
         .iter()
@@ -196,6 +209,9 @@ pub fn fold_mobility(model: ModelKind, params: &Params, materials: &[String]) ->
                     out.set(format!("{p}.cr_mean"), cr);
                     out.set(format!("{p}.static_friction_deg"), s);
                     out.set(format!("{p}.dynamic_friction_deg"), d);
+                    if g(STATIC_EXCESS).is_some() {
+                        out.set(format!("{p}.{STATIC_EXCESS}"), s - d);
+                    }
                 }
             }
             ModelKind::Lumped2d => {
@@ -223,6 +239,7 @@ mod tests {
             ("a.cr_sd", 0.05),
             ("a.static_friction_deg", 40.0),
             ("a.dynamic_friction_deg", 30.0),
+            ("a.static_excess_deg", 10.0),
             (MOBILITY, 1.2),
         ] {
             p.set(k, v);
@@ -232,6 +249,9 @@ mod tests {
         assert!((f.get("a.cr_mean").unwrap() - 0.36).abs() < 1e-12);
         let d = f.get("a.dynamic_friction_deg").unwrap();
         assert!((d.to_radians().tan() - 30f64.to_radians().tan() / 1.2).abs() < 1e-12);
+        // A tied static angle stays tied: the excess follows the folded angles.
+        let (s, e) = (f.get("a.static_friction_deg").unwrap(), f.get("a.static_excess_deg").unwrap());
+        assert!((s - d - e).abs() < 1e-12 && e < 10.0, "{s} {d} {e}");
         // Mobility 1 changes nothing.
         let (cr, sd, s, d) = apply_mobility_3d(0.3, 0.05, 40.0, 30.0, 1.0);
         assert!((cr - 0.3).abs() < 1e-15 && sd == 0.05 && (s - 40.0).abs() < 1e-12 && (d - 30.0).abs() < 1e-12);
