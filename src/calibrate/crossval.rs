@@ -51,12 +51,12 @@ pub struct CrossValidation {
 /// cluster's of `fold_link_m` where that is set (stratified k-fold; the clusters ours).
 pub fn fold_assignment(runs: &[FieldRun], cfg: &CalibrationConfig, k: usize) -> Vec<usize> {
     let all: Vec<usize> = (0..runs.len()).collect();
-    let mut clustered = Vec::new();
-    if let Some(link_m) = cfg.fold_link_m {
-        clustered = runs.to_vec();
-        assign_groups(&mut clustered, link_m);
-    }
-    split::folds(if clustered.is_empty() { runs } else { &clustered }, &all, k, cfg.seed, 100)
+    let clustered = cfg.fold_link_m.map(|link_m| {
+        let mut c = runs.to_vec();
+        assign_groups(&mut c, link_m);
+        c
+    });
+    split::folds(clustered.as_deref().unwrap_or(runs), &all, k, cfg.seed, 100)
 }
 
 /// Runs [`calibrate`] `k` times, each fold held out once, writing each fold's report to `out/fold_i/` and the
