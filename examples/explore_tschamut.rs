@@ -9,7 +9,7 @@
 //! edge of the proxy's LPS data (y = 130 m) or past it. With `--terrain-of SETTINGS` the proxy is modified as the
 //! `[terrain]` section of those calibration settings says: clipped to that data
 //! (`examples/tschamut_combined_clip.toml`: a simulated rock that crosses the edge ends there) or continued level
-//! past it (`examples/tschamut_combined_level.toml`).
+//! past it (`examples/tschamut_combined_level.toml`); their `release_attempts` is used too.
 //!
 //! Run: cargo run --release --example explore_tschamut -- [--terrain-of SETTINGS] CR CR_SD STATIC_DEG DYNAMIC_DEG
 //!        [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
@@ -49,7 +49,9 @@ fn main() {
     let dir = Path::new("meshes/tschamut2014");
     let mut cfg = CalibrationConfig::default();
     if let Some(file) = terrain_of {
-        cfg.terrain = CalibrationConfig::read(Path::new(&file)).unwrap().terrain;
+        let settings = CalibrationConfig::read(Path::new(&file)).unwrap();
+        cfg.terrain = settings.terrain;
+        cfg.release_attempts = settings.release_attempts;
     }
     cfg.simulation.effects.vegetation_drag_kg_s = args.get(4).copied().filter(|&c| c > 0.0);
     let model = open_model(dir, &dir.join("terrain_proxy.asc"), ModelKind::Rigid3d, &cfg, "explore_tschamut").unwrap();

@@ -604,3 +604,32 @@ fn a_slow_release_that_stalls_in_part_under_high_static_friction_is_reported_as_
     eprintln!("stalled share at 36°: {low}");
     assert!(low < STALLING_SHARE && listed.is_empty(), "{low}");
 }
+
+#[test]
+fn released_again_a_slow_release_runs_and_a_release_that_cannot_start_stays() {
+    // v083 under static friction 57° stalls in a quarter or more of its simulations (test above); with
+    // `release_attempts = 10` each stalled one is released again with fresh numbers and runs, and the ones that ran
+    // the first time are unchanged. v086 (0.02 m/s on the 13° release bench) stalls on every release and stays
+    // reported as not started.
+    use talus::calibrate::model::evaluate;
+    use talus::calibrate::runs::{runs_not_started, stalled_share};
+    use talus::calibrate::synthetic::material_params_3d;
+    let c = talus::calibrate::params::Candidate {
+        params: material_params_3d("default", [0.091, 0.078, 57.3, 20.5]),
+        ..Default::default()
+    };
+    let once = tschamut();
+    let again = tschamut_with(&CalibrationConfig { release_attempts: 10, ..Default::default() });
+    let runs = once.runs();
+    let which: Vec<usize> = ["v083", "v086"].iter().map(|id| runs.iter().position(|r| &r.id == id).unwrap()).collect();
+    let plain = evaluate(once.as_ref(), &c, &which, 20, 1, 0).unwrap();
+    let released = evaluate(again.as_ref(), &c, &which, 20, 1, 0).unwrap();
+    assert!(stalled_share(&plain[0]) >= 0.25, "{}", stalled_share(&plain[0]));
+    assert_eq!(stalled_share(&released[0]), 0.0);
+    for (p, r) in plain[0].sims.iter().zip(&released[0].sims) {
+        if p.runout_m >= talus::calibrate::runs::NOT_STARTED_M {
+            assert_eq!(p, r);
+        }
+    }
+    assert_eq!(runs_not_started(runs, &released), vec!["v086".to_string()]);
+}

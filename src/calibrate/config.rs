@@ -11,6 +11,7 @@
 //! outer_folds = 5           # talus calibrate --kfold without a number
 //! outer_repeats = 1         # --kfold repeated with seeds seed, seed+1, ... (the spread of its estimate)
 //! # fold_link_m = 10.0      # --kfold spreads each release cluster of this linkage over the folds (default: groups)
+//! release_attempts = 1      # a simulated rock that stays at its release while the field rock ran is released again
 //!
 //! [materials.default]       # 3DRB: a number fixes a parameter, [min, max] frees it
 //! cr_mean = [0.02, 0.8]
@@ -299,6 +300,11 @@ pub struct CalibrationConfig {
     /// over the folds, m (default: the release groups of `group_link_m`). A smaller distance than the groups'
     /// keeps every release point in every fold's calibration runs.
     pub fold_link_m: Option<f64>,
+    /// Releases of a simulated rock, at most (default 1). With more, a simulation that ends within
+    /// [`super::runs::NOT_STARTED_M`] of its release while the field rock ran is released again with fresh random
+    /// numbers ([`super::model::simulate_released`]): the campaign records only blocks that ran, so the model's
+    /// run-out is compared given that the rock left its release (ours).
+    pub release_attempts: usize,
     /// What the population fit minimises (default `crps`).
     pub objective: Objective,
     /// Most objective evaluations of the population fit (default 60 for 3DRB, 300 for 2DLM).
@@ -332,6 +338,7 @@ impl Default for CalibrationConfig {
             outer_repeats: 1,
             group_link_m: 20.0,
             fold_link_m: None,
+            release_attempts: 1,
             objective: Objective::default(),
             max_evaluations: None,
             threads: 0,
@@ -347,6 +354,8 @@ impl Default for CalibrationConfig {
 
 /// Most population-fit searches: search k uses the streams of `seed + k`, which must stay clear of the selection's.
 const MAX_SEARCH_STARTS: usize = 10;
+/// Most releases of one simulated rock ([`CalibrationConfig::release_attempts`]).
+const MAX_RELEASE_ATTEMPTS: usize = 100;
 /// Most repeats of the outer k-fold cross-validation.
 const MAX_OUTER_REPEATS: usize = 10;
 
@@ -450,6 +459,13 @@ impl CalibrationConfig {
         }
         if self.inner_folds < 2 || self.outer_folds < 2 {
             return Err(Error::invalid(f("inner_folds / outer_folds"), "must be at least 2", "use for example 5"));
+        }
+        if !(1..=MAX_RELEASE_ATTEMPTS).contains(&self.release_attempts) {
+            return Err(Error::invalid(
+                f("release_attempts"),
+                format!("must be in [1, {MAX_RELEASE_ATTEMPTS}], got {}", self.release_attempts),
+                "use 1 (every simulation counts as released) or about 10",
+            ));
         }
         if self.fold_link_m.is_some_and(|d| !(d.is_finite() && d >= 0.0)) {
             return Err(Error::invalid(f("fold_link_m"), "must be a non-negative distance", "use for example 10"));
@@ -659,6 +675,8 @@ mod tests {
         assert!(e.contains("simulation.effects"), "{e}");
         let e = CalibrationConfig::from_toml_str("search_starts = 0\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: search_starts") && e.contains("got 0"), "{e}");
+        let e = CalibrationConfig::from_toml_str("release_attempts = 0\n", "c.toml").unwrap_err().to_string();
+        assert!(e.contains("c.toml: release_attempts") && e.contains("got 0"), "{e}");
         let e = CalibrationConfig::from_toml_str("outer_repeats = 11\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: outer_repeats") && e.contains("got 11"), "{e}");
         let e = cfg.check_materials(ModelKind::Rigid3d, &["rock".into()], "c.toml").unwrap_err().to_string();

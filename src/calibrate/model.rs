@@ -8,7 +8,7 @@
 
 use super::config::ModelKind;
 use super::params::Candidate;
-use super::runs::FieldRun;
+use super::runs::{FieldRun, NOT_STARTED_M};
 use super::stats::{median, quantile_sorted, sorted};
 use crate::error::Result;
 use crate::raster::Grid;
@@ -129,6 +129,8 @@ pub trait Model: Sync {
     fn dominant_material(&self, region: &super::params::Region) -> String;
     /// Where residual maps go.
     fn map_frame(&self) -> MapFrame;
+    /// Releases of a simulated rock, at most ([`super::config::CalibrationConfig::release_attempts`]).
+    fn release_attempts(&self) -> usize;
     /// Applies a candidate.
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>>;
 }
@@ -136,6 +138,23 @@ pub trait Model: Sync {
 /// The random stream index of repeat `repeat` of the run at campaign position `index`.
 pub fn stream_index(index: usize, repeat: usize) -> u64 {
     ((index as u64) << 24) | repeat as u64
+}
+
+/// Repeat `repeat` of `run`, released again with fresh random numbers while it ends within
+/// [`NOT_STARTED_M`] of its release and the field rock ran farther, `attempts` releases at most (ours). The first
+/// release uses the streams of `seed` (so one attempt is the plain simulation); release k those of a seed derived
+/// from `seed` and k. Field campaigns record the blocks that ran: a block that stayed where it was put was pushed
+/// again, so a simulated rock that stays is a release that did not happen, not a run-out of zero.
+pub fn simulate_released(prepared: &dyn Prepared, run: &FieldRun, repeat: usize, seed: u64, attempts: usize) -> Sim {
+    let mut sim = prepared.simulate(run, repeat, seed);
+    for k in 1..attempts as u64 {
+        if run.runout_m <= NOT_STARTED_M || sim.runout_m >= NOT_STARTED_M {
+            break;
+        }
+        // An odd multiplier (the 64-bit golden ratio) keeps the attempts' seeds apart from seed + 1, seed + 2, ...
+        sim = prepared.simulate(run, repeat, seed ^ k.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    }
+    sim
 }
 
 /// Simulates runs `which` (indices into `model.runs()`) `repeats` times each under `candidate`, in parallel over
@@ -164,9 +183,10 @@ pub fn evaluate_prepared(
 ) -> Vec<RunSims> {
     let runs = model.runs();
     let n = which.len() * repeats;
+    let attempts = model.release_attempts();
     let flat = crate::parallel::collect_in_order(n, threads, |k| {
         let (i, r) = (which[k / repeats], k % repeats);
-        prepared.simulate(&runs[i], r, seed)
+        simulate_released(prepared, &runs[i], r, seed, attempts)
     });
     let mut out: Vec<RunSims> = which.iter().map(|&i| RunSims { run: i, sims: Vec::with_capacity(repeats) }).collect();
     for (k, s) in flat.into_iter().enumerate() {
@@ -201,5 +221,63 @@ impl PathThinner {
             self.points.push([x as f32, y as f32]);
         }
         self.points
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Mutex;
+
+    /// Stalls (run-out 0) for every seed but `runs_on`, and records the seeds it was asked for.
+    struct Stalling {
+        runs_on: u64,
+        seeds: Mutex<Vec<u64>>,
+    }
+
+    impl Prepared for Stalling {
+        fn simulate(&self, _run: &FieldRun, _repeat: usize, seed: u64) -> Sim {
+            self.seeds.lock().unwrap().push(seed);
+            let runout_m = if seed == self.runs_on { 50.0 } else { 0.0 };
+            Sim { runout_m, rest_m: [0.0; 3], stopped: true, summary: PathSummary::default(), path: Vec::new() }
+        }
+    }
+
+    fn field_run(runout_m: f64) -> FieldRun {
+        FieldRun {
+            id: "r".into(),
+            index: 0,
+            block_id: "1".into(),
+            mass_kg: 1.0,
+            size_m: [1.0; 3],
+            release_m: [0.0; 3],
+            velocity_mps: [0.0; 3],
+            spin_radps: [0.0; 3],
+            rest_m: [runout_m, 0.0, 0.0],
+            runout_m,
+            group: 0,
+        }
+    }
+
+    #[test]
+    fn a_stalled_simulation_is_released_again_only_where_the_field_rock_ran() {
+        let third = 7 ^ 2u64.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let model = Stalling { runs_on: third, seeds: Mutex::new(Vec::new()) };
+        let seeds = |m: &Stalling| std::mem::take(&mut *m.seeds.lock().unwrap());
+        // One attempt: the plain simulation, on the seed given.
+        assert_eq!(simulate_released(&model, &field_run(80.0), 0, 7, 1).runout_m, 0.0);
+        assert_eq!(seeds(&model), vec![7]);
+        // The third release runs; the search stops there.
+        assert_eq!(simulate_released(&model, &field_run(80.0), 0, 7, 10).runout_m, 50.0);
+        assert_eq!(seeds(&model).len(), 3);
+        // A field rock that did not run: its stall is the prediction, not a release to repeat.
+        assert_eq!(simulate_released(&model, &field_run(0.5), 0, 7, 10).runout_m, 0.0);
+        assert_eq!(seeds(&model), vec![7]);
+        // Every release stalls: the last is kept after `attempts` tries.
+        let never = Stalling { runs_on: 1, seeds: Mutex::new(Vec::new()) };
+        assert_eq!(simulate_released(&never, &field_run(80.0), 0, 7, 4).runout_m, 0.0);
+        let tried = seeds(&never);
+        assert_eq!(tried.len(), 4);
+        assert!(tried.iter().skip(1).all(|&s| s != 7 && s != 8), "{tried:?}");
     }
 }

@@ -23,6 +23,7 @@ pub struct Model2d {
     profile: Profile,
     materials: Vec<String>,
     options: Options2d,
+    release_attempts: usize,
 }
 
 impl Model2d {
@@ -34,7 +35,8 @@ impl Model2d {
         cfg: &CalibrationConfig,
     ) -> Result<Model2d> {
         let profile = Profile::from_csv_path(profile_file)?;
-        Self::from_parts(runs, group_names, profile, cfg.options2d.clone())
+        Ok(Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
+            .with_release_attempts(cfg.release_attempts))
     }
 
     /// A model from a profile and options. For synthetic studies and tests.
@@ -62,7 +64,13 @@ impl Model2d {
             }
         }
         let materials = profile.material_names().to_vec();
-        Ok(Model2d { runs, group_names, profile, materials, options })
+        Ok(Model2d { runs, group_names, profile, materials, options, release_attempts: 1 })
+    }
+
+    /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model2d::from_parts`]).
+    pub fn with_release_attempts(mut self, attempts: usize) -> Model2d {
+        self.release_attempts = attempts;
+        self
     }
 
     fn material(params: &Params, prefix: &str, m: f64) -> Result<Material2d> {
@@ -162,6 +170,10 @@ impl Model for Model2d {
         }
         let best = (0..length.len()).max_by(|&i, &j| length[i].total_cmp(&length[j]).then(j.cmp(&i))).unwrap_or(0);
         self.materials[best].clone()
+    }
+
+    fn release_attempts(&self) -> usize {
+        self.release_attempts
     }
 
     fn map_frame(&self) -> MapFrame {

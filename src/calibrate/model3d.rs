@@ -31,6 +31,7 @@ pub struct Model3d {
     sim: SimParams,
     dem: Option<Grid>,
     median_mass_kg: f64,
+    release_attempts: usize,
 }
 
 impl Model3d {
@@ -98,7 +99,8 @@ impl Model3d {
         for (id, block) in &campaign.blocks {
             bodies.insert(id.clone(), campaign.body(block)?);
         }
-        Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)
+        Ok(Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)?
+            .with_release_attempts(cfg.release_attempts))
     }
 
     /// A model from a terrain already built (its materials name the calibrated materials), rock bodies by block
@@ -132,7 +134,13 @@ impl Model3d {
         let mut masses: Vec<f64> = runs.iter().map(|r| r.mass_kg).collect();
         masses.sort_by(|a, b| a.total_cmp(b));
         let median_mass_kg = masses.get(masses.len() / 2).copied().unwrap_or(100.0);
-        Ok(Model3d { runs, group_names, materials, terrain, bodies, sim, dem, median_mass_kg })
+        Ok(Model3d { runs, group_names, materials, terrain, bodies, sim, dem, median_mass_kg, release_attempts: 1 })
+    }
+
+    /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model3d::from_parts`]).
+    pub fn with_release_attempts(mut self, attempts: usize) -> Model3d {
+        self.release_attempts = attempts;
+        self
     }
 
     /// The terrain (with the placeholder materials it was built with).
@@ -240,6 +248,10 @@ impl Model for Model3d {
         let base = self.dem.as_ref().map(|g| g.cell_x_m).unwrap_or(spacing);
         let cell = base.max((extent[2] - extent[0]).max(extent[3] - extent[1]) / 50.0);
         MapFrame { dem: self.dem.clone(), extent_m: extent, cell_m: cell, profile: false }
+    }
+
+    fn release_attempts(&self) -> usize {
+        self.release_attempts
     }
 
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>> {

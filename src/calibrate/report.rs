@@ -470,12 +470,15 @@ pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
              run weighs twice), always on the same side of a split or fold.\n"
         );
     }
+    let attempts = r.settings.release_attempts;
+    let released =
+        if attempts > 1 { format!(" after {attempts} releases (`release_attempts`)") } else { String::new() };
     for id in &r.runs_not_started {
         let _ = writeln!(
             s,
-            "**Run not started:** every baseline simulation of {id} ends within {} m of its release while the field \
-             rock ran farther; its error comes from the release state or the terrain at the release, not from the \
-             parameters.\n",
+            "**Run not started:** every baseline simulation of {id} ends within {} m of its release{released} while \
+             the field rock ran farther; its error comes from the release state or the terrain at the release, not \
+             from the parameters.\n",
             super::runs::NOT_STARTED_M
         );
     }
@@ -483,8 +486,9 @@ pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
         let _ = writeln!(
             s,
             "**Runs that stall at the release:** {} (the share of baseline simulations ending within {} m of the \
-             release; each field rock ran farther). The others of their simulations run the slope, so the median \
-             run-out of such a run, and the run-out MAE and coverage with it, flip as the share crosses one half.\n",
+             release{released}; each field rock ran farther). The others of their simulations run the slope, so \
+             the median run-out of such a run, and the run-out MAE and coverage with it, flip as the share crosses \
+             one half.\n",
             r.runs_stalling
                 .iter()
                 .map(|x| format!("{} ({}, {:.2})", x.trajectory_id, x.set, x.stalled_share))

@@ -295,6 +295,9 @@ impl Model for NullModel<'_> {
     fn map_frame(&self) -> MapFrame {
         self.inner.map_frame()
     }
+    fn release_attempts(&self) -> usize {
+        self.inner.release_attempts()
+    }
     fn prepare<'a>(
         &'a self,
         candidate: &super::params::Candidate,
