@@ -140,6 +140,10 @@ pub fn stream_index(index: usize, repeat: usize) -> u64 {
     ((index as u64) << 24) | repeat as u64
 }
 
+/// Release k of a simulation uses the seed `seed ^ k·RELEASE_SEED_STEP`: an odd multiplier (the 64-bit golden
+/// ratio) keeps these seeds apart from `seed + 1`, `seed + 2`, ... that other searches use.
+const RELEASE_SEED_STEP: u64 = 0x9E37_79B9_7F4A_7C15;
+
 /// Repeat `repeat` of `run`, released again with fresh random numbers while it ends within
 /// [`NOT_STARTED_M`] of its release and the field rock ran farther, `attempts` releases at most (ours). The first
 /// release uses the streams of `seed` (so one attempt is the plain simulation); release k those of a seed derived
@@ -151,8 +155,7 @@ pub fn simulate_released(prepared: &dyn Prepared, run: &FieldRun, repeat: usize,
         if run.runout_m <= NOT_STARTED_M || sim.runout_m >= NOT_STARTED_M {
             break;
         }
-        // An odd multiplier (the 64-bit golden ratio) keeps the attempts' seeds apart from seed + 1, seed + 2, ...
-        sim = prepared.simulate(run, repeat, seed ^ k.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        sim = prepared.simulate(run, repeat, seed ^ k.wrapping_mul(RELEASE_SEED_STEP));
     }
     sim
 }
@@ -261,7 +264,7 @@ mod tests {
 
     #[test]
     fn a_stalled_simulation_is_released_again_only_where_the_field_rock_ran() {
-        let third = 7 ^ 2u64.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let third = 7 ^ 2u64.wrapping_mul(RELEASE_SEED_STEP);
         let model = Stalling { runs_on: third, seeds: Mutex::new(Vec::new()) };
         let seeds = |m: &Stalling| std::mem::take(&mut *m.seeds.lock().unwrap());
         // One attempt: the plain simulation, on the seed given.
