@@ -49,6 +49,13 @@ pub struct Sim {
     pub path: Vec<[f32; 2]>,
 }
 
+impl Sim {
+    /// True if the simulated rock ended within [`NOT_STARTED_M`] of its release: it did not start.
+    pub fn stalled(&self) -> bool {
+        self.runout_m < NOT_STARTED_M
+    }
+}
+
 /// All simulations of one run under one candidate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RunSims {
@@ -152,7 +159,7 @@ const RELEASE_SEED_STEP: u64 = 0x9E37_79B9_7F4A_7C15;
 pub fn simulate_released(prepared: &dyn Prepared, run: &FieldRun, repeat: usize, seed: u64, attempts: usize) -> Sim {
     let mut sim = prepared.simulate(run, repeat, seed);
     for k in 1..attempts as u64 {
-        if run.runout_m <= NOT_STARTED_M || sim.runout_m >= NOT_STARTED_M {
+        if !run.ran() || !sim.stalled() {
             break;
         }
         sim = prepared.simulate(run, repeat, seed ^ k.wrapping_mul(RELEASE_SEED_STEP));

@@ -42,6 +42,11 @@ pub struct FieldRun {
 }
 
 impl FieldRun {
+    /// True if the field rock left its release: it ran farther than [`NOT_STARTED_M`].
+    pub fn ran(&self) -> bool {
+        self.runout_m > NOT_STARTED_M
+    }
+
     /// Elongation a/b of the sorted sizes (≥ 1).
     pub fn elongation(&self) -> f64 {
         self.size_m[0] / self.size_m[1]
@@ -172,7 +177,7 @@ pub fn stalled_share(s: &RunSims) -> f64 {
     if s.sims.is_empty() {
         return 0.0;
     }
-    s.sims.iter().filter(|x| x.runout_m < NOT_STARTED_M).count() as f64 / s.sims.len() as f64
+    s.sims.iter().filter(|x| x.stalled()).count() as f64 / s.sims.len() as f64
 }
 
 /// A run some of whose simulations stall at the release while the field rock ran.
@@ -192,7 +197,7 @@ pub struct StallingRun {
 /// share crosses one half; a slow release on gentle ground under a high static friction does this (ours).
 pub fn runs_stalling(runs: &[FieldRun], sims: &[RunSims], set: &str) -> Vec<StallingRun> {
     sims.iter()
-        .filter(|s| runs[s.run].runout_m > NOT_STARTED_M)
+        .filter(|s| runs[s.run].ran())
         .map(|s| (s, stalled_share(s)))
         .filter(|&(_, share)| share >= STALLING_SHARE)
         .map(|(s, share)| StallingRun { trajectory_id: runs[s.run].id.clone(), set: set.into(), stalled_share: share })
@@ -204,10 +209,7 @@ pub fn runs_stalling(runs: &[FieldRun], sims: &[RunSims], set: &str) -> Vec<Stal
 /// angle, for a block pushed off by hand, or terrain that is wrong at the release). Their error is the release's,
 /// not the parameters'; they are reported, not removed (ours).
 pub fn runs_not_started(runs: &[FieldRun], sims: &[RunSims]) -> Vec<String> {
-    sims.iter()
-        .filter(|s| runs[s.run].runout_m > NOT_STARTED_M && stalled_share(s) == 1.0)
-        .map(|s| runs[s.run].id.clone())
-        .collect()
+    sims.iter().filter(|s| runs[s.run].ran() && stalled_share(s) == 1.0).map(|s| runs[s.run].id.clone()).collect()
 }
 
 /// Pairs of runs that are the same record ([`same_record`]), by `trajectory_id`.
