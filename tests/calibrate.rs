@@ -50,7 +50,7 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
 }
 
 #[test]
-fn several_searches_keep_the_one_best_on_fresh_numbers() {
+fn several_searches_or_start_points_keep_the_one_best_on_fresh_numbers() {
     let model =
         synthetic_2d(&Synthetic2d { seed: 4, runs_per_group: 6, ..Default::default() }, Options2d::default()).unwrap();
     let mut cfg = config_2d();
@@ -78,6 +78,21 @@ fn several_searches_keep_the_one_best_on_fresh_numbers() {
     assert!(searches.iter().all(|s| s.selection_objective_m.is_finite() && s.evaluations <= 40));
     let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(md.contains("ran 3 searches"), "{md}");
+    // Start points: the settings' start on the seed's numbers first (the single search again), then other starts.
+    cfg.search_starts = 1;
+    cfg.start_points = 3;
+    let points = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report;
+    let searches: Vec<talus::calibrate::fit::SearchRecord> =
+        serde_json::from_value(points.population_fit["searches"].clone()).unwrap();
+    assert_eq!(searches.len(), 3);
+    assert!(searches.iter().all(|s| s.seed == cfg.seed));
+    assert_eq!(searches[0].objective_m, one.population_fit["objective_m"].as_f64().unwrap());
+    assert_eq!(searches[0].parameters, first.parameters);
+    assert!(searches[1].start != searches[0].start && searches[2].start != searches[1].start);
+    let best = searches.iter().min_by(|a, b| a.selection_objective_m.total_cmp(&b.selection_objective_m)).unwrap();
+    for (name, v) in &best.parameters {
+        assert_eq!(points.baseline.parameters.get(name), Some(*v), "{name}");
+    }
 }
 
 /// Tiny settings for the 3DRB tests (the engine runs in a debug build here).

@@ -6,6 +6,7 @@
 //! repeats = 20              # simulations per run for the reported metrics
 //! search_repeats = 4        # per run inside the optimiser (common random numbers)
 //! search_starts = 1         # population-fit searches on different numbers, the best on fresh ones kept
+//! start_points = 1          # population-fit searches from different start points (the start, then a Latin hypercube)
 //! holdout_fraction = 0.2    # seeded split when no --holdout file is given
 //! inner_folds = 5           # nested cross-validation of the effects loop
 //! outer_folds = 5           # talus calibrate --kfold without a number
@@ -285,6 +286,10 @@ pub struct CalibrationConfig {
     /// Searches of the population fit, each on its own random numbers; the one best on fresh numbers is kept
     /// (default 1; see [`super::fit::fit_population`]). Each costs a full fit.
     pub search_starts: usize,
+    /// Start points of the population fit: the settings' start, then `start_points − 1` points of a seeded Latin
+    /// hypercube over the free parameters' bounds (default 1; see [`super::fit::start_points`]). Each start runs
+    /// `search_starts` searches; of all of them the one best on fresh numbers is kept. Each costs a full fit.
+    pub start_points: usize,
     /// Share of runs held out by the seeded split when no hold-out file is given (default 0.2).
     pub holdout_fraction: f64,
     /// Folds of the nested cross-validation inside the calibration runs (default 5).
@@ -332,6 +337,7 @@ impl Default for CalibrationConfig {
             repeats: 20,
             search_repeats: 4,
             search_starts: 1,
+            start_points: 1,
             holdout_fraction: 0.2,
             inner_folds: 5,
             outer_folds: 5,
@@ -352,8 +358,11 @@ impl Default for CalibrationConfig {
     }
 }
 
-/// Most population-fit searches: search k uses the streams of `seed + k`, which must stay clear of the selection's.
+/// Most population-fit searches per start point: search k uses the streams of `seed + k`, which must stay clear of
+/// the selection's.
 const MAX_SEARCH_STARTS: usize = 10;
+/// Most start points of the population fit.
+const MAX_START_POINTS: usize = 10;
 /// Most releases of one simulated rock ([`CalibrationConfig::release_attempts`]).
 const MAX_RELEASE_ATTEMPTS: usize = 100;
 /// Most repeats of the outer k-fold cross-validation.
@@ -441,6 +450,13 @@ impl CalibrationConfig {
                 f("search_starts"),
                 format!("must be in [1, {MAX_SEARCH_STARTS}], got {}", self.search_starts),
                 "use 1 (one search) or 2-3 where the fit depends on its random numbers",
+            ));
+        }
+        if !(1..=MAX_START_POINTS).contains(&self.start_points) {
+            return Err(Error::invalid(
+                f("start_points"),
+                format!("must be in [1, {MAX_START_POINTS}], got {}", self.start_points),
+                "use 1 (the settings' start) or 2-4 where the fit depends on where it starts",
             ));
         }
         if !(self.holdout_fraction > 0.0 && self.holdout_fraction < 0.9) {
@@ -675,6 +691,8 @@ mod tests {
         assert!(e.contains("simulation.effects"), "{e}");
         let e = CalibrationConfig::from_toml_str("search_starts = 0\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: search_starts") && e.contains("got 0"), "{e}");
+        let e = CalibrationConfig::from_toml_str("start_points = 11\n", "c.toml").unwrap_err().to_string();
+        assert!(e.contains("c.toml: start_points") && e.contains("got 11"), "{e}");
         let e = CalibrationConfig::from_toml_str("release_attempts = 0\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: release_attempts") && e.contains("got 0"), "{e}");
         let e = CalibrationConfig::from_toml_str("outer_repeats = 11\n", "c.toml").unwrap_err().to_string();

@@ -524,22 +524,25 @@ pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
     let searches: Vec<super::fit::SearchRecord> =
         serde_json::from_value(r.population_fit["searches"].clone()).unwrap_or_default();
     if !searches.is_empty() {
-        let _ = writeln!(s, "\nThe population fit ran {} searches, each on its own random numbers; the one with the lowest objective on fresh numbers is the baseline.\n", searches.len());
+        let _ = writeln!(s, "\nThe population fit ran {} searches (the seed of their random numbers and their start below); the one with the lowest objective on fresh numbers is the baseline.\n", searches.len());
         let _ = writeln!(
             s,
-            "| search seed | objective on its numbers, m | on fresh numbers, m | evaluations | parameters |"
+            "| search seed | start | objective on its numbers, m | on fresh numbers, m | evaluations | parameters |"
         );
-        let _ = writeln!(s, "|---|---|---|---|---|");
+        let _ = writeln!(s, "|---|---|---|---|---|---|");
+        let list = |m: &std::collections::BTreeMap<String, f64>| {
+            m.iter().map(|(k, v)| format!("{k} {v:.3}")).collect::<Vec<_>>().join(", ")
+        };
         for x in &searches {
-            let p: Vec<String> = x.parameters.iter().map(|(k, v)| format!("{k} {v:.3}")).collect();
             let _ = writeln!(
                 s,
-                "| {} | {:.2} | {:.2} | {} | {} |",
+                "| {} | {} | {:.2} | {:.2} | {} | {} |",
                 x.seed,
+                list(&x.start),
                 x.objective_m,
                 x.selection_objective_m,
                 x.evaluations,
-                p.join(", ")
+                list(&x.parameters)
             );
         }
     }
