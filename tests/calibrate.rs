@@ -3,7 +3,7 @@
 
 use talus::calibrate::config::{CalibrationConfig, ModelKind, Objective, ParamSetting};
 use talus::calibrate::crossval::fold_assignment;
-use talus::calibrate::fit::with_unit;
+use talus::calibrate::fit::{with_unit, SearchRecord};
 use talus::calibrate::params::Region;
 use talus::calibrate::synthetic::{case_2d, synthetic_2d, synthetic_3d, Synthetic2d, Synthetic3d, TRUE_2D};
 use talus::calibrate::{base_candidate, calibrate, split, Model};
@@ -63,18 +63,20 @@ fn several_searches_or_start_points_keep_the_one_best_on_fresh_numbers() {
     cfg.search_starts = 3;
     let dir = tempfile::tempdir().unwrap();
     let three = calibrate(&model, &cfg, &cal, &hold, "seeded", Some(dir.path()), &quiet).unwrap().report;
-    let searches: Vec<talus::calibrate::fit::SearchRecord> =
-        serde_json::from_value(three.population_fit["searches"].clone()).unwrap();
+    let searches: Vec<SearchRecord> = serde_json::from_value(three.population_fit["searches"].clone()).unwrap();
     assert_eq!(searches.iter().map(|s| s.seed).collect::<Vec<_>>(), [cfg.seed, cfg.seed + 1, cfg.seed + 2]);
     // The first search is the single search of before: same numbers, same budget, same result.
     let first = &searches[0];
     assert_eq!(first.evaluations, one.population_fit["evaluations"].as_u64().unwrap() as usize);
     assert_eq!(first.objective_m, one.population_fit["objective_m"].as_f64().unwrap());
     // The baseline is the search with the lowest objective on the fresh numbers, whatever its own numbers said.
-    let best = searches.iter().min_by(|a, b| a.selection_objective_m.total_cmp(&b.selection_objective_m)).unwrap();
-    for (name, v) in &best.parameters {
-        assert_eq!(three.baseline.parameters.get(name), Some(*v), "{name}");
-    }
+    let assert_baseline_is_best_on_fresh = |report: &talus::calibrate::report::Report, searches: &[SearchRecord]| {
+        let best = searches.iter().min_by(|a, b| a.selection_objective_m.total_cmp(&b.selection_objective_m)).unwrap();
+        for (name, v) in &best.parameters {
+            assert_eq!(report.baseline.parameters.get(name), Some(*v), "{name}");
+        }
+    };
+    assert_baseline_is_best_on_fresh(&three, &searches);
     assert!(searches.iter().all(|s| s.selection_objective_m.is_finite() && s.evaluations <= 40));
     let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(md.contains("ran 3 searches"), "{md}");
@@ -82,17 +84,13 @@ fn several_searches_or_start_points_keep_the_one_best_on_fresh_numbers() {
     cfg.search_starts = 1;
     cfg.start_points = 3;
     let points = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report;
-    let searches: Vec<talus::calibrate::fit::SearchRecord> =
-        serde_json::from_value(points.population_fit["searches"].clone()).unwrap();
+    let searches: Vec<SearchRecord> = serde_json::from_value(points.population_fit["searches"].clone()).unwrap();
     assert_eq!(searches.len(), 3);
     assert!(searches.iter().all(|s| s.seed == cfg.seed));
     assert_eq!(searches[0].objective_m, one.population_fit["objective_m"].as_f64().unwrap());
     assert_eq!(searches[0].parameters, first.parameters);
     assert!(searches[1].start != searches[0].start && searches[2].start != searches[1].start);
-    let best = searches.iter().min_by(|a, b| a.selection_objective_m.total_cmp(&b.selection_objective_m)).unwrap();
-    for (name, v) in &best.parameters {
-        assert_eq!(points.baseline.parameters.get(name), Some(*v), "{name}");
-    }
+    assert_baseline_is_best_on_fresh(&points, &searches);
 }
 
 /// Tiny settings for the 3DRB tests (the engine runs in a debug build here).

@@ -25,6 +25,7 @@ use super::model::{evaluate, Model, RunSims};
 use super::objective::objective;
 use super::params::{Candidate, FreeParam};
 use super::search::{nelder_mead, SearchResult};
+use super::stats::shuffle;
 use crate::random::{stream, uniform};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -130,9 +131,7 @@ pub fn start_points(x0: &[f64], n: usize, seed: u64) -> Vec<Vec<f64>> {
     for d in 0..x0.len() {
         let mut rng = stream(seed.wrapping_add(START_POINTS_SEED_OFFSET), d as u64);
         let mut strata: Vec<usize> = (0..m).collect();
-        for i in (1..m).rev() {
-            strata.swap(i, ((uniform(&mut rng) * (i + 1) as f64) as usize).min(i));
-        }
+        shuffle(&mut strata, &mut rng);
         for (point, s) in points.iter_mut().zip(strata) {
             point[d] = (s as f64 + uniform(&mut rng)) / m as f64;
         }
