@@ -15,6 +15,7 @@
 //!        [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
 //! e.g. `-- 0.30 0.06 35.4 20.3` (a W1 k-fold fold's baseline), `-- 0.30 0.06 35.4 14.0 10` (with vegetation drag)
 //! and `-- 0.175 0.127 42.3 18.5 5.65 3` (and a dynamic friction spread of 3° between rocks)
+use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
 use std::path::Path;
 use talus::calibrate::config::CalibrationConfig;
@@ -59,7 +60,20 @@ fn main() {
         Candidate { params: material_params_3d("default", [args[0], args[1], args[2], args[3]]), ..Default::default() };
     c.params.set("default.dynamic_friction_sd_deg", args.get(5).copied().unwrap_or(0.0));
     let all: Vec<usize> = (0..model.runs().len()).collect();
+    let t0 = std::time::Instant::now();
     let sims = evaluate(model.as_ref(), &c, &all, REPEATS, 1, 0).unwrap();
+    let secs = t0.elapsed().as_secs_f64();
+    // Every simulated rest point to the bit, hashed: an engine change that claims identical results must keep it.
+    let mut digest = Sha256::new();
+    for x in sims.iter().flat_map(|r| &r.sims) {
+        x.rest_m.iter().for_each(|v| digest.update(v.to_le_bytes()));
+    }
+    let n = sims.iter().map(|r| r.sims.len()).sum::<usize>();
+    println!(
+        "{n} simulations in {secs:.1} s: {:.0} simulations/s; rest points' sha256 {:.16x}",
+        n as f64 / secs,
+        digest.finalize()
+    );
     println!(
         "block  runs  observed m  simulated m  bias m  MAE m  floor m  W1 m  coverage  90% width m  obs sd in group m  overrun  edge obs/sim  stalled"
     );

@@ -91,6 +91,23 @@ fn several_searches_or_start_points_keep_the_one_best_on_fresh_numbers() {
     assert_eq!(searches[0].parameters, first.parameters);
     assert!(searches[1].start != searches[0].start && searches[2].start != searches[1].start);
     assert_baseline_is_best_on_fresh(&points, &searches);
+    // Screened start points: the start and 5 hypercube points each evaluated once, the 2 lowest searched from, in
+    // order; each search's first evaluation is its start on the same numbers, so it ends at or below it.
+    cfg.start_points = 2;
+    cfg.screen_points = 5;
+    let lines = std::sync::Mutex::new(Vec::new());
+    let log = |l: &str| lines.lock().unwrap().push(l.to_string());
+    let screened = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &log).unwrap().report;
+    let searches: Vec<SearchRecord> = serde_json::from_value(screened.population_fit["searches"].clone()).unwrap();
+    let at_start: Vec<f64> = searches.iter().map(|s| s.start_screened_m.unwrap()).collect();
+    assert!(searches.len() == 2 && at_start[0] <= at_start[1], "{searches:?}");
+    assert!(searches.iter().all(|s| s.objective_m <= s.start_screened_m.unwrap()), "{searches:?}");
+    assert_ne!(searches[0].start, searches[1].start);
+    let lines = lines.into_inner().unwrap();
+    assert!(lines.iter().any(|l| l.contains("6 start points screened")), "{lines:?}");
+    assert_baseline_is_best_on_fresh(&screened, &searches);
+    // Without screening no start has a screened objective.
+    assert!(points.population_fit["searches"].as_array().unwrap().iter().all(|s| s["start_screened_m"].is_null()));
 }
 
 /// Tiny settings for the 3DRB tests (the engine runs in a debug build here).

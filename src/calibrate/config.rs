@@ -7,6 +7,7 @@
 //! search_repeats = 4        # per run inside the optimiser (common random numbers)
 //! search_starts = 1         # population-fit searches on different numbers, the best on fresh ones kept
 //! start_points = 1          # population-fit searches from different start points (the start, then a Latin hypercube)
+//! screen_points = 0         # > 0: the start points are the best of the start and this many hypercube points
 //! holdout_fraction = 0.2    # seeded split when no --holdout file is given
 //! inner_folds = 5           # nested cross-validation of the effects loop
 //! outer_folds = 5           # talus calibrate --kfold without a number
@@ -290,6 +291,10 @@ pub struct CalibrationConfig {
     /// hypercube over the free parameters' bounds (default 1; see [`super::fit::start_points`]). Each start runs
     /// `search_starts` searches; of all of them the one best on fresh numbers is kept. Each costs a full fit.
     pub start_points: usize,
+    /// Start points screened (default 0: none): when positive, the settings' start and `screen_points` points of a
+    /// seeded Latin hypercube are each evaluated once on the first search's numbers, and the `start_points` with
+    /// the lowest objective are the start points (see [`super::fit::fit_population`]). Each costs one evaluation.
+    pub screen_points: usize,
     /// Share of runs held out by the seeded split when no hold-out file is given (default 0.2).
     pub holdout_fraction: f64,
     /// Folds of the nested cross-validation inside the calibration runs (default 5).
@@ -338,6 +343,7 @@ impl Default for CalibrationConfig {
             search_repeats: 4,
             search_starts: 1,
             start_points: 1,
+            screen_points: 0,
             holdout_fraction: 0.2,
             inner_folds: 5,
             outer_folds: 5,
@@ -363,6 +369,8 @@ impl Default for CalibrationConfig {
 const MAX_SEARCH_STARTS: usize = 10;
 /// Most start points of the population fit.
 const MAX_START_POINTS: usize = 10;
+/// Most start points screened.
+const MAX_SCREEN_POINTS: usize = 1000;
 /// Most releases of one simulated rock ([`CalibrationConfig::release_attempts`]).
 const MAX_RELEASE_ATTEMPTS: usize = 100;
 /// Most repeats of the outer k-fold cross-validation.
@@ -457,6 +465,19 @@ impl CalibrationConfig {
                 f("start_points"),
                 format!("must be in [1, {MAX_START_POINTS}], got {}", self.start_points),
                 "use 1 (the settings' start) or 2-4 where the fit depends on where it starts",
+            ));
+        }
+        if self.screen_points > MAX_SCREEN_POINTS
+            || (self.screen_points > 0 && self.screen_points + 1 < self.start_points)
+        {
+            return Err(Error::invalid(
+                f("screen_points"),
+                format!(
+                    "must be 0 or in [start_points - 1 = {}, {MAX_SCREEN_POINTS}], got {}",
+                    self.start_points - 1,
+                    self.screen_points
+                ),
+                "use 0 (no screening) or for example 30",
             ));
         }
         if !(self.holdout_fraction > 0.0 && self.holdout_fraction < 0.9) {
@@ -693,6 +714,11 @@ mod tests {
         assert!(e.contains("c.toml: search_starts") && e.contains("got 0"), "{e}");
         let e = CalibrationConfig::from_toml_str("start_points = 11\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: start_points") && e.contains("got 11"), "{e}");
+        let e = CalibrationConfig::from_toml_str("start_points = 4\nscreen_points = 2\n", "c.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("c.toml: screen_points") && e.contains("got 2"), "{e}");
+        assert!(CalibrationConfig::from_toml_str("start_points = 4\nscreen_points = 3\n", "c.toml").is_ok());
         let e = CalibrationConfig::from_toml_str("release_attempts = 0\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: release_attempts") && e.contains("got 0"), "{e}");
         let e = CalibrationConfig::from_toml_str("outer_repeats = 11\n", "c.toml").unwrap_err().to_string();

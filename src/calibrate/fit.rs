@@ -19,6 +19,12 @@
 //! free parameters' bounds (McKay, Beckman & Conover 1979, Technometrics 21: 239–245: each parameter's range cut
 //! into P − 1 equal strata with one point in each, the strata paired at random), the usual multi-start for a local
 //! optimiser; the results are compared on fresh numbers as above, so the choice uses the calibration runs only.
+//!
+//! **Screened start points** (ours): a full search from each start costs the whole budget (120 evaluations on
+//! Tschamut), so few starts can be afforded. With `screen_points = S > 0` the settings' start and S points of a
+//! Latin hypercube are each evaluated once, on the first search's numbers, and the P with the lowest objective are
+//! the start points: many starts looked at for the price of S evaluations, the searches spent on the most promising
+//! (the screening stage of multi-level multi-start methods, Rinnooy Kan & Timmer 1987, Math. Program. 39: 27–56).
 
 use super::config::CalibrationConfig;
 use super::model::{evaluate, Model, RunSims};
@@ -156,11 +162,47 @@ pub struct SearchRecord {
     /// The free parameters it started from.
     #[serde(default)]
     pub start: std::collections::BTreeMap<String, f64>,
+    /// Its start's objective in the screening (on the first search's numbers), m; none without screening.
+    #[serde(default)]
+    pub start_screened_m: Option<f64>,
+}
+
+/// The start points of the population fit in the unit cube, each with its objective in the screening: the first
+/// `start_points` of [`start_points`], or, with `screen_points = S > 0`, the `start_points` lowest of the start and
+/// S hypercube points, each evaluated once on the numbers of `seed` (ties keep the earlier point).
+fn screened_starts(
+    ctx: &Context,
+    start: &Candidate,
+    free: &[FreeParam],
+    which: &[usize],
+) -> Vec<(Vec<f64>, Option<f64>)> {
+    let (cfg, x0) = (ctx.cfg, unit_of(start, free));
+    let points = cfg.start_points.max(1);
+    if cfg.screen_points == 0 {
+        return start_points(&x0, points, cfg.seed).into_iter().map(|x| (x, None)).collect();
+    }
+    let mut screened: Vec<(Vec<f64>, f64)> = start_points(&x0, cfg.screen_points + 1, cfg.seed)
+        .into_iter()
+        .map(|x| {
+            let v = ctx.objective_seeded(&with_unit(start, free, &x), which, cfg.search_repeats, cfg.seed);
+            (x, v)
+        })
+        .collect();
+    screened.sort_by(|a, b| a.1.total_cmp(&b.1));
+    screened.truncate(points);
+    let kept: Vec<String> = screened.iter().map(|(_, v)| format!("{v:.2}")).collect();
+    (ctx.log)(&format!(
+        "population fit: {} start points screened; the starts are the best {points} ({} m)",
+        cfg.screen_points + 1,
+        kept.join(", ")
+    ));
+    screened.into_iter().map(|(x, v)| (x, Some(v))).collect()
 }
 
 /// The population fit: [`fit`] with the settings' budget, or, with `search_starts = K` and `start_points = P` not
-/// both 1, K searches on the streams of `seed`, `seed + 1`, … from each of P start points ([`start_points`]), of
-/// which the one with the lowest objective on fresh streams (`repeats` per run) is kept (see the module notes).
+/// both 1 or with `screen_points` set, K searches on the streams of `seed`, `seed + 1`, … from each of P start
+/// points ([`start_points`], screened where set), of which the one with the lowest objective on fresh streams
+/// (`repeats` per run) is kept (see the module notes).
 /// Returns the kept candidate, its search record and every search's summary (empty for one search).
 pub fn fit_population(
     ctx: &Context,
@@ -170,16 +212,15 @@ pub fn fit_population(
 ) -> (Candidate, SearchResult, Vec<SearchRecord>) {
     let budget = ctx.cfg.max_evaluations(ctx.model.kind());
     let (streams, points) = (ctx.cfg.search_starts.max(1), ctx.cfg.start_points.max(1));
-    if streams * points == 1 {
+    if streams * points == 1 && ctx.cfg.screen_points == 0 {
         let (c, s) = fit(ctx, start, free, which, budget, "population fit", ctx.cfg.seed);
         return (c, s, Vec::new());
     }
-    let x0 = unit_of(start, free);
     let values = |c: &Candidate| free.iter().map(|p| (p.name.clone(), c.params.get_or(&p.name, f64::NAN))).collect();
     let selection_seed = ctx.cfg.seed.wrapping_add(SELECTION_SEED_OFFSET);
     let mut results = Vec::new();
     let mut records = Vec::new();
-    for x in start_points(&x0, points, ctx.cfg.seed) {
+    for (x, screened) in screened_starts(ctx, start, free, which) {
         let from = with_unit(start, free, &x);
         for k in 0..streams {
             let seed = ctx.cfg.seed.wrapping_add(k as u64);
@@ -194,6 +235,7 @@ pub fn fit_population(
                 evaluations: s.evaluations,
                 parameters: values(&c),
                 start: values(&from),
+                start_screened_m: screened,
             });
             results.push((c, s));
         }

@@ -527,18 +527,19 @@ pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
         let _ = writeln!(s, "\nThe population fit ran {} searches (the seed of their random numbers and their start below); the one with the lowest objective on fresh numbers is the baseline.\n", searches.len());
         let _ = writeln!(
             s,
-            "| search seed | start | objective on its numbers, m | on fresh numbers, m | evaluations | parameters |"
+            "| search seed | start | start screened, m | objective on its numbers, m | on fresh numbers, m | evaluations | parameters |"
         );
-        let _ = writeln!(s, "|---|---|---|---|---|---|");
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|");
         let list = |m: &std::collections::BTreeMap<String, f64>| {
             m.iter().map(|(k, v)| format!("{k} {v:.3}")).collect::<Vec<_>>().join(", ")
         };
         for x in &searches {
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.2} | {:.2} | {} | {} |",
+                "| {} | {} | {} | {:.2} | {:.2} | {} | {} |",
                 x.seed,
                 list(&x.start),
+                x.start_screened_m.map_or("–".into(), |v| format!("{v:.2}")),
                 x.objective_m,
                 x.selection_objective_m,
                 x.evaluations,
