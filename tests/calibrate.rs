@@ -22,6 +22,25 @@ fn config_2d() -> CalibrationConfig {
     cfg
 }
 
+/// Every calibration settings file shipped in `examples/` (`tschamut_*.toml`; `tschamut.toml` is a run scenario)
+/// reads without error, so that the commands of the README and docs/calibration.md start.
+#[test]
+fn shipped_calibration_settings_files_read() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let mut names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| n.starts_with("tschamut_") && n.ends_with(".toml"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 10, "{names:?}");
+    for n in &names {
+        if let Err(e) = CalibrationConfig::read(&dir.join(n)) {
+            panic!("{n}: {e}");
+        }
+    }
+}
+
 #[test]
 fn profile_campaign_recovers_rn_rt_and_friction() {
     let model =
