@@ -167,17 +167,17 @@ pub struct SearchRecord {
     pub start_screened_m: Option<f64>,
 }
 
-/// The start points of the population fit in the unit cube, each with its objective in the screening: the first
-/// `start_points` of [`start_points`], or, with `screen_points = S > 0`, the `start_points` lowest of the start and
-/// S hypercube points, each evaluated once on the numbers of `seed` (ties keep the earlier point).
+/// The `points` start points of the population fit in the unit cube, each with its objective in the screening: the
+/// first `points` of [`start_points`], or, with `screen_points = S > 0`, the `points` lowest of the start and S
+/// hypercube points, each evaluated once on the numbers of `seed` (ties keep the earlier point).
 fn screened_starts(
     ctx: &Context,
     start: &Candidate,
     free: &[FreeParam],
     which: &[usize],
+    points: usize,
 ) -> Vec<(Vec<f64>, Option<f64>)> {
     let (cfg, x0) = (ctx.cfg, unit_of(start, free));
-    let points = cfg.start_points.max(1);
     if cfg.screen_points == 0 {
         return start_points(&x0, points, cfg.seed).into_iter().map(|x| (x, None)).collect();
     }
@@ -220,7 +220,7 @@ pub fn fit_population(
     let selection_seed = ctx.cfg.seed.wrapping_add(SELECTION_SEED_OFFSET);
     let mut results = Vec::new();
     let mut records = Vec::new();
-    for (x, screened) in screened_starts(ctx, start, free, which) {
+    for (x, screened) in screened_starts(ctx, start, free, which, points) {
         let from = with_unit(start, free, &x);
         for k in 0..streams {
             let seed = ctx.cfg.seed.wrapping_add(k as u64);
