@@ -34,15 +34,19 @@ const DATA_EDGE_Y_M: f64 = 130.0;
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
-    let terrain_of = if args.first().is_some_and(|a| a == "--terrain-of") && args.len() > 1 {
-        Some(args.drain(..2).nth(1).unwrap())
-    } else {
-        None
-    };
+    let (mut terrain_of, mut roughness_m) = (None, None);
+    while args.len() > 1 && args[0].starts_with("--") {
+        match args.drain(..2).collect::<Vec<_>>().as_slice() {
+            [flag, v] if flag == "--terrain-of" => terrain_of = Some(v.clone()),
+            [flag, v] if flag == "--roughness-m" => roughness_m = Some(v.parse::<f64>().expect("a number")),
+            [flag, _] => panic!("unknown option {flag}"),
+            _ => unreachable!(),
+        }
+    }
     let args: Vec<f64> = args.iter().map(|a| a.parse().expect("numbers")).collect();
     if !(4..=6).contains(&args.len()) {
         eprintln!(
-            "usage: explore_tschamut [--terrain-of SETTINGS] CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S \
+            "usage: explore_tschamut [--terrain-of SETTINGS] [--roughness-m R] CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S \
              [DYNAMIC_FRICTION_SD_DEG]]"
         );
         std::process::exit(2);
@@ -55,6 +59,7 @@ fn main() {
         cfg.release_attempts = settings.release_attempts;
     }
     cfg.simulation.effects.vegetation_drag_kg_s = args.get(4).copied().filter(|&c| c > 0.0);
+    cfg.simulation.effects.roughness_m = roughness_m;
     let model = open_model(dir, &dir.join("terrain_proxy.asc"), ModelKind::Rigid3d, &cfg, "explore_tschamut").unwrap();
     let mut c =
         Candidate { params: material_params_3d("default", [args[0], args[1], args[2], args[3]]), ..Default::default() };

@@ -215,6 +215,55 @@ fn vegetation_drag_stops_a_frictionless_block_after_v0_m_over_c() {
 }
 
 #[test]
+fn roughness_tilts_each_impact_normal_by_a_uniform_share_of_atan_rough_over_r() {
+    // PlatRock's size-relative roughness (physics.md §4): the normal of a new contact tilts by U(0,1)·atan(rough/R)
+    // toward a uniform azimuth. Cubes dropped corner-down on level ground, so that one vertex lands first, below the
+    // centre: the first impact's normal leans by at most atan(rough/R), half of that on average, the lean and its
+    // direction are uniform, the rebound picks up a horizontal speed (without roughness the impulse is vertical
+    // through the centre), and no impact adds energy.
+    let terrain = Terrain::from_function(40.0, 8, material(0.5, 40.0, 30.0), |_, _| 0.0).unwrap();
+    let r = rock(ShapeKind::Cube, 2650.0);
+    let rough_m = 0.2;
+    let bound = (rough_m / r.equivalent_radius_m()).atan();
+    let params = SimParams {
+        max_time_s: 0.8,
+        effects: talus::sim::Effects { roughness_m: Some(rough_m), ..Default::default() },
+        ..Default::default()
+    };
+    let corner = UnitQuaternion::rotation_between(&Vector3::new(1.0, 1.0, 1.0), &-Vector3::z()).unwrap();
+    let corner_down = at_rest(Vector3::new(20.3, 20.1, 0.5 * 3f64.sqrt() + 2.0), corner);
+    let (mut tilts, mut east, mut moved) = (Vec::new(), 0u64, 0u64);
+    let drops = 300;
+    for i in 0..drops {
+        let mut rec = Record::default();
+        simulate(&terrain, &r, corner_down, &params, &mut stream(7, i), &mut rec);
+        let first = rec.impacts.first().expect("an impact");
+        tilts.push(first.normal.z.clamp(-1.0, 1.0).acos());
+        east += u64::from(first.normal.x > 0.0);
+        for imp in &rec.impacts {
+            assert!(imp.kinetic_after_j <= imp.kinetic_before_j * (1.0 + 1e-9), "drop {i}: an impact added energy");
+        }
+        let rising = rec.samples.iter().find(|s| s.t_s > first.t_s && !s.in_contact && s.velocity_mps.z > 0.0);
+        moved += u64::from(rising.is_some_and(|s| s.velocity_mps.xy().norm() > 1e-3));
+    }
+    let mut smooth = Record::default();
+    let no_roughness = SimParams { max_time_s: 0.8, ..Default::default() };
+    simulate(&terrain, &r, corner_down, &no_roughness, &mut stream(7, 0), &mut smooth);
+    let rising =
+        smooth.samples.iter().find(|s| s.t_s > smooth.impacts[0].t_s && !s.in_contact && s.velocity_mps.z > 0.0);
+    assert!(rising.expect("a rebound").velocity_mps.xy().norm() < 1e-6, "without roughness the rebound is vertical");
+    let max = tilts.iter().cloned().fold(0.0, f64::max);
+    let mean = tilts.iter().sum::<f64>() / drops as f64;
+    let below_half = tilts.iter().filter(|&&t| t < 0.5 * bound).count() as f64 / drops as f64;
+    assert!(max <= bound + 1e-9 && max > 0.9 * bound, "largest tilt {max} against the bound {bound}");
+    // U(0, b): mean b/2 with a standard error of b/√(12 n) ≈ 0.017 b here; half the tilts below b/2 (± 0.029).
+    assert_relative_eq!(mean, 0.5 * bound, max_relative = 0.08);
+    assert!((below_half - 0.5).abs() < 0.1, "share below half the bound {below_half}");
+    assert!((east as f64 / drops as f64 - 0.5).abs() < 0.1, "share of normals leaning toward +x {east}/{drops}");
+    assert!(moved > drops * 9 / 10, "only {moved} of {drops} rebounds move sideways");
+}
+
+#[test]
 fn block_on_an_incline_below_its_static_friction_angle_stays_put() {
     let terrain = incline(25.0, material(0.0, 30.0, 20.0));
     let r = rock(ShapeKind::FlatBox, 1000.0);
