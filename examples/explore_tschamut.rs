@@ -12,8 +12,8 @@
 //! past it (`examples/tschamut_combined_level.toml`); their `release_attempts` is used too. `--roughness-m R` switches
 //! on size-relative ground roughness (`Effects::roughness_m`).
 //!
-//! Run: cargo run --release --example explore_tschamut -- [--terrain-of SETTINGS] [--roughness-m R] CR CR_SD STATIC_DEG DYNAMIC_DEG
-//!        [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
+//! Run: cargo run --release --example explore_tschamut -- [--terrain-of SETTINGS] [--roughness-m R] CR CR_SD
+//!        STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
 //! e.g. `-- 0.30 0.06 35.4 20.3` (a W1 k-fold fold's baseline), `-- 0.30 0.06 35.4 14.0 10` (with vegetation drag)
 //! and `-- 0.175 0.127 42.3 18.5 5.65 3` (and a dynamic friction spread of 3° between rocks)
 use sha2::{Digest, Sha256};
@@ -47,8 +47,8 @@ fn main() {
     let args: Vec<f64> = args.iter().map(|a| a.parse().expect("numbers")).collect();
     if !(4..=6).contains(&args.len()) {
         eprintln!(
-            "usage: explore_tschamut [--terrain-of SETTINGS] [--roughness-m R] CR CR_SD STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S \
-             [DYNAMIC_FRICTION_SD_DEG]]"
+            "usage: explore_tschamut [--terrain-of SETTINGS] [--roughness-m R] CR CR_SD STATIC_DEG DYNAMIC_DEG \
+             [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]"
         );
         std::process::exit(2);
     }
