@@ -37,6 +37,14 @@ impl Observer for Record {
     }
 }
 
+impl Record {
+    /// The first sample in free flight and rising after the first impact: the rebound.
+    fn rebound(&self) -> Option<&Sample> {
+        let t = self.impacts.first()?.t_s;
+        self.samples.iter().find(|s| s.t_s > t && !s.in_contact && s.velocity_mps.z > 0.0)
+    }
+}
+
 fn at_rest(position: Vector3<f64>, orientation: UnitQuaternion<f64>) -> RigidState {
     RigidState { position_m: position, velocity_mps: Vector3::zeros(), orientation, omega_body_radps: Vector3::zeros() }
 }
@@ -82,8 +90,7 @@ fn cube_dropped_flat_rebounds_with_cr_times_impact_speed_and_no_spin() {
     let v_in = (2.0 * GRAVITY_MPS2 * drop_m).sqrt();
     assert_relative_eq!(first.approach_speed_mps, v_in, max_relative = 0.01);
     // After the impact and before the next one: a free rise whose apex gives the rebound speed.
-    let rising =
-        rec.samples.iter().find(|s| s.t_s > first.t_s && !s.in_contact && s.velocity_mps.z > 0.0).expect("rising");
+    let rising = rec.rebound().expect("rising");
     let v_out = (rising.velocity_mps.z.powi(2) + 2.0 * GRAVITY_MPS2 * rising.clearance_m).sqrt();
     let apex_clearance = rising.clearance_m + rising.velocity_mps.z.powi(2) / (2.0 * GRAVITY_MPS2);
     assert_relative_eq!(v_out, cr * v_in, max_relative = 0.01);
@@ -243,15 +250,15 @@ fn roughness_tilts_each_impact_normal_by_a_uniform_share_of_atan_rough_over_r() 
         for imp in &rec.impacts {
             assert!(imp.kinetic_after_j <= imp.kinetic_before_j * (1.0 + 1e-9), "drop {i}: an impact added energy");
         }
-        let rising = rec.samples.iter().find(|s| s.t_s > first.t_s && !s.in_contact && s.velocity_mps.z > 0.0);
-        moved += u64::from(rising.is_some_and(|s| s.velocity_mps.xy().norm() > 1e-3));
+        moved += u64::from(rec.rebound().is_some_and(|s| s.velocity_mps.xy().norm() > 1e-3));
     }
     let mut smooth = Record::default();
     let no_roughness = SimParams { max_time_s: 0.8, ..Default::default() };
     simulate(&terrain, &r, corner_down, &no_roughness, &mut stream(7, 0), &mut smooth);
-    let rising =
-        smooth.samples.iter().find(|s| s.t_s > smooth.impacts[0].t_s && !s.in_contact && s.velocity_mps.z > 0.0);
-    assert!(rising.expect("a rebound").velocity_mps.xy().norm() < 1e-6, "without roughness the rebound is vertical");
+    assert!(
+        smooth.rebound().expect("a rebound").velocity_mps.xy().norm() < 1e-6,
+        "without roughness the rebound is vertical"
+    );
     let max = tilts.iter().cloned().fold(0.0, f64::max);
     let mean = tilts.iter().sum::<f64>() / drops as f64;
     let below_half = tilts.iter().filter(|&&t| t < 0.5 * bound).count() as f64 / drops as f64;
