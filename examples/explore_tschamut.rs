@@ -9,10 +9,15 @@
 //! edge of the proxy's LPS data (y = 130 m) or past it. With `--terrain-of SETTINGS` the proxy is modified as the
 //! `[terrain]` section of those calibration settings says: clipped to that data
 //! (`examples/tschamut_combined_clip.toml`: a simulated rock that crosses the edge ends there) or continued level
-//! past it (`examples/tschamut_combined_level.toml`); their `release_attempts` is used too. `--roughness-m R` switches
-//! on size-relative ground roughness (`Effects::roughness_m`).
+//! past it (`examples/tschamut_combined_level.toml`); their `release_attempts` and `materials_by` are used too (every
+//! material gets the parameters given; with `--floor CR,DYNAMIC_DEG` the material `floor` of `materials_by = "slope"`
+//! gets its own Cr and dynamic angle, its static angle the same step above it). `--roughness-m R` switches
+//! on size-relative ground roughness (`Effects::roughness_m`). `--campaign DIR` reads the runs and blocks from
+//! another campaign folder on the same terrain (a copy with a changed `block_metadata.csv` `shape`, say); `--runs`
+//! (first) adds a table of every run: observed, simulated median and 5-95 % range, rest point.
 //!
-//! Run: cargo run --release --example explore_tschamut -- [--terrain-of SETTINGS] [--roughness-m R] CR CR_SD
+//! Run: cargo run --release --example explore_tschamut -- [--runs] [--terrain-of SETTINGS] [--roughness-m R]
+//!        [--campaign DIR] [--floor CR,DYNAMIC_DEG] CR CR_SD
 //!        STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
 //! e.g. `-- 0.30 0.06 35.4 20.3` (a W1 k-fold fold's baseline), `-- 0.30 0.06 35.4 14.0 10` (with vegetation drag)
 //! and `-- 0.175 0.127 42.3 18.5 5.65 3` (and a dynamic friction spread of 3° between rocks)
@@ -35,11 +40,21 @@ const DATA_EDGE_Y_M: f64 = 130.0;
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
-    let (mut terrain_of, mut roughness_m) = (None, None);
+    let (mut terrain_of, mut roughness_m, mut campaign) = (None, None, "meshes/tschamut2014".to_string());
+    let mut floor: Option<[f64; 2]> = None;
+    let per_run = args.first().is_some_and(|a| a == "--runs");
+    if per_run {
+        args.remove(0);
+    }
     while args.len() > 1 && args[0].starts_with("--") {
         match args.drain(..2).collect::<Vec<_>>().as_slice() {
             [flag, v] if flag == "--terrain-of" => terrain_of = Some(v.clone()),
             [flag, v] if flag == "--roughness-m" => roughness_m = Some(v.parse::<f64>().expect("a number")),
+            [flag, v] if flag == "--campaign" => campaign = v.clone(),
+            [flag, v] if flag == "--floor" => {
+                let f: Vec<f64> = v.split(',').map(|x| x.parse().expect("CR,DYNAMIC_DEG")).collect();
+                floor = Some([f[0], f[1]]);
+            }
             [flag, _] => panic!("unknown option {flag}"),
             _ => unreachable!(),
         }
@@ -47,12 +62,13 @@ fn main() {
     let args: Vec<f64> = args.iter().map(|a| a.parse().expect("numbers")).collect();
     if !(4..=6).contains(&args.len()) {
         eprintln!(
-            "usage: explore_tschamut [--terrain-of SETTINGS] [--roughness-m R] CR CR_SD STATIC_DEG DYNAMIC_DEG \
+            "usage: explore_tschamut [--runs] [--terrain-of SETTINGS] [--roughness-m R] [--campaign DIR] [--floor CR,DYN] CR CR_SD \
+             STATIC_DEG DYNAMIC_DEG \
              [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]"
         );
         std::process::exit(2);
     }
-    let dir = Path::new("meshes/tschamut2014");
+    let dir = Path::new(&campaign);
     let mut cfg = CalibrationConfig::default();
     if let Some(file) = terrain_of {
         let settings = CalibrationConfig::read(Path::new(&file)).unwrap();
@@ -61,10 +77,23 @@ fn main() {
     }
     cfg.simulation.effects.vegetation_drag_kg_s = args.get(4).copied().filter(|&c| c > 0.0);
     cfg.simulation.effects.roughness_m = roughness_m;
-    let model = open_model(dir, &dir.join("terrain_proxy.asc"), ModelKind::Rigid3d, &cfg, "explore_tschamut").unwrap();
-    let mut c =
-        Candidate { params: material_params_3d("default", [args[0], args[1], args[2], args[3]]), ..Default::default() };
-    c.params.set("default.dynamic_friction_sd_deg", args.get(5).copied().unwrap_or(0.0));
+    let model = open_model(
+        dir,
+        Path::new("meshes/tschamut2014/terrain_proxy.asc"),
+        ModelKind::Rigid3d,
+        &cfg,
+        "explore_tschamut",
+    )
+    .unwrap();
+    let mut c = Candidate::default();
+    for name in model.materials() {
+        let [cr, static_deg, dynamic_deg] = match floor {
+            Some([cr, d]) if name == "floor" => [cr, d + args[2] - args[3], d],
+            _ => [args[0], args[2], args[3]],
+        };
+        c.params.0.extend(material_params_3d(name, [cr, args[1], static_deg, dynamic_deg]).0);
+        c.params.set(format!("{name}.dynamic_friction_sd_deg"), args.get(5).copied().unwrap_or(0.0));
+    }
     let all: Vec<usize> = (0..model.runs().len()).collect();
     let t0 = std::time::Instant::now();
     let sims = evaluate(model.as_ref(), &c, &all, REPEATS, 1, 0).unwrap();
@@ -119,5 +148,23 @@ fn main() {
             m.coverage_90,
             overrun_share(model.runs(), &s, 0..REPEATS)
         );
+    }
+    if per_run {
+        println!("run   block  group  observed m  median m  5% m  95% m  in 5-95%  rest x m  rest y m");
+        for r in &sims {
+            let run = &model.runs()[r.run];
+            let (lo, hi) = (r.runout_quantile(0.05), r.runout_quantile(0.95));
+            println!(
+                "{:<5} {:>5}  {:>5}  {:>10.1}  {:>8.1}  {lo:>4.1}  {hi:>5.1}  {:>8}  {:>8.1}  {:>8.1}",
+                run.id,
+                run.block_id,
+                run.group,
+                run.runout_m,
+                r.runout_quantile(0.5),
+                if (lo..=hi).contains(&run.runout_m) { "yes" } else { "no" },
+                run.rest_m[0],
+                run.rest_m[1]
+            );
+        }
     }
 }

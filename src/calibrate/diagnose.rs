@@ -7,6 +7,7 @@
 //! by construction.
 
 use super::model::{Model, RunSims};
+use super::runs::FieldRun;
 use super::stats::{median, spearman_permutation};
 use crate::random::stream;
 use serde::{Deserialize, Serialize};
@@ -127,4 +128,72 @@ pub fn diagnose(model: &dyn Model, sims: &[RunSims], permutations: usize, seed: 
     }
     out.sort_by(|a, b| a.p_value.total_cmp(&b.p_value).then(b.spearman_rho.abs().total_cmp(&a.spearman_rho.abs())));
     (cov, out)
+}
+
+/// The covariate name of [`spread_check`].
+pub const OUTSIDE_RANGE: &str = "outside_simulated_range";
+
+/// The spread check (ours): are the observed run-outs outside the range of their own simulations more often than
+/// chance allows? If a run's simulations and its field run were exchangeable draws, the observed value's rank among
+/// the n simulated ones would be uniform on 0..=n, so it would fall below all of them or above all of them with
+/// probability 2/(n+1) (0.095 for 20 repeats). More runs outside than that means the simulated run-outs are too
+/// narrow (or off-centre): the signature of scatter the model lacks. Returned as a [`Diagnostic`] with covariate
+/// [`OUTSIDE_RANGE`], residual `runout`, the observed share outside in `spearman_rho` (not a correlation here) and
+/// the exact one-sided p-value of that many or more (the runs' chances summed as a Poisson binomial).
+pub fn spread_check(runs: &[FieldRun], sims: &[RunSims]) -> Diagnostic {
+    let mut chances = Vec::new();
+    let mut outside = 0;
+    for s in sims.iter().filter(|s| !s.sims.is_empty()) {
+        let r = s.runouts();
+        let (lo, hi) = r.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+        let obs = runs[s.run].runout_m;
+        outside += usize::from(obs < lo || obs > hi);
+        chances.push(2.0 / (r.len() as f64 + 1.0));
+    }
+    // dist[k]: probability of exactly k runs outside under exchangeability.
+    let mut dist = vec![1.0];
+    for &q in &chances {
+        let mut next = vec![0.0; dist.len() + 1];
+        for (k, &p) in dist.iter().enumerate() {
+            next[k] += p * (1.0 - q);
+            next[k + 1] += p * q;
+        }
+        dist = next;
+    }
+    let n = chances.len();
+    Diagnostic {
+        covariate: OUTSIDE_RANGE.into(),
+        residual: "runout".into(),
+        spearman_rho: if n > 0 { outside as f64 / n as f64 } else { 0.0 },
+        p_value: dist[outside..].iter().sum::<f64>().min(1.0),
+        n,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::metrics::tests::{run, sims};
+
+    #[test]
+    fn the_spread_check_counts_runs_outside_their_simulated_range_against_the_exchangeable_rate() {
+        // 20 runs, each simulated 19 times over 90..=108 m: the chance of falling outside is 2/20 = 0.1.
+        let observed = |outside: usize| -> Vec<FieldRun> {
+            (0..20).map(|i| run(i, 0, if i < outside { 120.0 } else { 100.5 })).collect()
+        };
+        let range: Vec<f64> = (0..19).map(|k| 90.0 + k as f64).collect();
+        let s: Vec<RunSims> = (0..20).map(|i| sims(i, &range)).collect();
+        // Two of 20 outside is what chance gives: no signal.
+        let d = spread_check(&observed(2), &s);
+        assert_eq!((d.covariate.as_str(), d.n), (OUTSIDE_RANGE, 20));
+        assert!((d.spearman_rho - 0.1).abs() < 1e-12);
+        // P(X >= 2) for Binomial(20, 0.1) = 1 - 0.9^20 - 20·0.1·0.9^19.
+        let exact = 1.0 - 0.9f64.powi(20) - 20.0 * 0.1 * 0.9f64.powi(19);
+        assert!((d.p_value - exact).abs() < 1e-12, "{}", d.p_value);
+        // Eight of 20 outside: too narrow, p below 0.001.
+        let d = spread_check(&observed(8), &s);
+        assert!(d.p_value < 1e-3 && (d.spearman_rho - 0.4).abs() < 1e-12, "{d:?}");
+        // None outside: p = 1.
+        assert_eq!(spread_check(&observed(0), &s).p_value, 1.0);
+    }
 }

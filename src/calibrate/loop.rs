@@ -10,7 +10,8 @@
 //! - an *effect arm*: the effect's parameter on its grid × the same mobility factors (so the effect is not
 //!   credited for a mere re-centring), or × Cr factors {0.5, 0.7, 1, 1.4, 2} for a restitution effect, which
 //!   changes what Cr means, or × the mobility factors on the dynamic friction alone for a resistance in contact
-//!   (rolling resistance, soft-ground and vegetation drag; [`super::effects::Recentring`]); for a zone, the
+//!   (rolling resistance, soft-ground and vegetation drag) and for roughness ([`super::effects::Recentring`]); for
+//!   a zone, the
 //!   candidate zones are derived from the training folds only and the zone material's mobility is stepped over
 //!   {0.2, 0.4, 0.7, 1.5} (in 3DRB also, at mobility 1, its soft-ground drag over {3, 10, 30} s⁻¹). A
 //!   restitution effect is switched on *centred*: every material's Cr is divided by the effect's factor at the
@@ -34,7 +35,7 @@
 //! the base parameters), and the loop starts again.
 
 use super::config::ModelKind;
-use super::diagnose::{diagnose, Diagnostic};
+use super::diagnose::{diagnose, spread_check, Diagnostic};
 use super::effects::{
     definition, effects_for, recentring, EffectDef, EffectKind, Recentring, CR_SCALE_GRID, MOBILITY_GRID,
     ZONE_DRAG_GRID, ZONE_MOBILITY_GRID,
@@ -158,11 +159,18 @@ pub fn effects_loop(
                 z.p_value, z.statistic, z.deposition_p_value, z.overrun_share, z.overrun_p_value
             ));
         }
+        let spread = spread_check(model.runs(), &diag_sims);
+        (ctx.log)(&format!(
+            "effects loop, round {round}: spread check: {:.2} of the runs outside their simulated range \
+             (exchangeable: 2/(repeats + 1)), p = {:.3}",
+            spread.spearman_rho, spread.p_value
+        ));
         let proposals = propose(
             ctx,
             &allowed,
             &current,
             &diags,
+            &spread,
             zc.as_ref().map(|z| (z.p_value, z.statistic, !z.regions.is_empty())),
             round,
         );
@@ -458,6 +466,7 @@ fn propose(
     allowed: &[&'static EffectDef],
     current: &Candidate,
     diags: &[Diagnostic],
+    spread: &Diagnostic,
     zone: Option<(f64, f64, bool)>,
     round: usize,
 ) -> Vec<Proposal> {
@@ -507,11 +516,7 @@ fn propose(
                 if current.effect_of(def.kind).is_some() {
                     continue;
                 }
-                let hits: Vec<Diagnostic> = runout
-                    .iter()
-                    .filter(|d| def.signature.contains(&d.covariate.as_str()) && d.p_value <= alpha)
-                    .map(|d| (*d).clone())
-                    .collect();
+                let hits = signature_hits(def, &runout, spread, alpha);
                 if let Some(strength) = hits.iter().map(|d| d.p_value).reduce(f64::min) {
                     props.push(Proposal { def, label: def.name.to_string(), material: None, evidence: hits, strength });
                 }
@@ -528,6 +533,17 @@ fn propose(
     props.truncate(cfg.effects.max_proposals);
     let _ = round;
     props
+}
+
+/// The diagnostics (run-out correlations, and the spread check) in `def`'s signature at p ≤ `alpha`.
+fn signature_hits(def: &EffectDef, runout: &[&Diagnostic], spread: &Diagnostic, alpha: f64) -> Vec<Diagnostic> {
+    runout
+        .iter()
+        .copied()
+        .chain(std::iter::once(spread))
+        .filter(|d| def.signature.contains(&d.covariate.as_str()) && d.p_value <= alpha)
+        .cloned()
+        .collect()
 }
 
 /// Out-of-fold errors: in each fold, the setting (among `fold_settings[f]`) with the best objective on the other
@@ -802,12 +818,35 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_resistance_effect_recentres_only_the_dynamic_friction() {
+    fn the_spread_check_proposes_roughness_alone() {
+        let d = |covariate: &str, p_value: f64| Diagnostic {
+            covariate: covariate.into(),
+            residual: "runout".into(),
+            spearman_rho: 0.3,
+            p_value,
+            n: 40,
+        };
+        let too_narrow = d(crate::calibrate::diagnose::OUTSIDE_RANGE, 0.001);
+        let hits = |kind: EffectKind, spread: &Diagnostic| {
+            signature_hits(definition(ModelKind::Rigid3d, kind).unwrap(), &[&d("mass_kg", 0.5)], spread, 0.05)
+        };
+        assert_eq!(hits(EffectKind::Roughness, &too_narrow), vec![too_narrow.clone()]);
+        for kind in [EffectKind::SpeedRestitution, EffectKind::MassRestitution, EffectKind::VegetationDrag] {
+            assert!(hits(kind, &too_narrow).is_empty(), "{kind:?}");
+        }
+        // Within what chance gives: nothing.
+        assert!(hits(EffectKind::Roughness, &d(crate::calibrate::diagnose::OUTSIDE_RANGE, 0.3)).is_empty());
+    }
+
+    #[test]
+    fn a_resistance_effect_or_roughness_recentres_only_the_dynamic_friction() {
         let mut c = Candidate::default();
         for (k, v) in [("a.cr_mean", 0.3), ("a.static_friction_deg", 40.0), ("a.dynamic_friction_deg", 20.0)] {
             c.params.set(k, v);
         }
-        assert_eq!(recentring(EffectKind::VegetationDrag), Recentring::DynamicFriction);
+        for kind in [EffectKind::VegetationDrag, EffectKind::RollingResistance, EffectKind::Roughness] {
+            assert_eq!(recentring(kind), Recentring::DynamicFriction, "{kind:?}");
+        }
         scale_dynamic_friction(&mut c, 1.2);
         let d = c.params.get("a.dynamic_friction_deg").unwrap();
         assert!((d.to_radians().tan() - 20f64.to_radians().tan() / 1.2).abs() < 1e-12, "{d}");

@@ -174,7 +174,7 @@ pub fn run_errors(runs: &[FieldRun], sims: &[RunSims]) -> Vec<f64> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::calibrate::model::{PathSummary, Sim};
 
@@ -192,7 +192,8 @@ mod tests {
         assert_eq!(crps(&[10.0, 10.0], 10.0), 0.0);
     }
 
-    fn run(i: usize, group: usize, obs: f64) -> FieldRun {
+    /// A run of block `b{group}` released at the origin that came to rest `obs` m along x (shared by tests).
+    pub(crate) fn run(i: usize, group: usize, obs: f64) -> FieldRun {
         FieldRun {
             id: format!("r{i}"),
             index: i,
@@ -208,7 +209,8 @@ mod tests {
         }
     }
 
-    fn sims(run: usize, values: &[f64]) -> RunSims {
+    /// Simulations of `run` ending at `values` along x (shared by tests).
+    pub(crate) fn sims(run: usize, values: &[f64]) -> RunSims {
         RunSims {
             run,
             sims: values

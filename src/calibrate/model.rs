@@ -254,19 +254,7 @@ mod tests {
     }
 
     fn field_run(runout_m: f64) -> FieldRun {
-        FieldRun {
-            id: "r".into(),
-            index: 0,
-            block_id: "1".into(),
-            mass_kg: 1.0,
-            size_m: [1.0; 3],
-            release_m: [0.0; 3],
-            velocity_mps: [0.0; 3],
-            spin_radps: [0.0; 3],
-            rest_m: [runout_m, 0.0, 0.0],
-            runout_m,
-            group: 0,
-        }
+        crate::calibrate::metrics::tests::run(0, 0, runout_m)
     }
 
     #[test]

@@ -168,7 +168,10 @@ pub const TRUE_3D: [f64; 4] = [0.35, 0.05, 40.0, 32.0];
 ///   lose almost everything, the rolling ones hit slowly and keep most.
 /// - `zone` (and `control_c`): rounded boulders start 2 m above a 20 m long 30° slope that ends in an 8° plain, on
 ///   which they roll off the 160 m terrain; `zone` hides soft ground (drag 20/s, [`standard_zone`]) on the plain
-///   below the two southern release points.
+///   below the two southern release points. `rough` hides ground roughness of 0.3 m on the same design: every
+///   impact's normal tilts by up to 68° under the 20 kg boulders and 32° under the 1200 kg ones, which scatters
+///   run-outs more than the model without it can (on the `size` design the cubes' own tumbling hid it: the spread
+///   check did not fire).
 /// - `size` (and `control_b`): cubes dropped 0.5 to 20 m onto a 15° apron; `size` hides Cr' = Cr (m/150 kg)^0.4, so
 ///   the 20 kg blocks bounce less and the 1200 kg ones more.
 pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
@@ -197,6 +200,7 @@ pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
         "speed" => Synthetic3d { hidden: Hidden::SpeedRestitution(6.0), ..two_regime },
         "zone" => Synthetic3d { hidden: Hidden::DragZone(standard_zone(), 20.0), ..plain },
         "control_a" => two_regime,
+        "rough" => Synthetic3d { hidden: Hidden::Roughness(0.3), ..plain },
         "control_c" => plain,
         "size" => Synthetic3d { hidden: Hidden::MassRestitution(-0.4), ..drops },
         "control_b" => drops,
