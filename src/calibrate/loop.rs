@@ -11,9 +11,8 @@
 //!   credited for a mere re-centring), or × Cr factors {0.5, 0.7, 1, 1.4, 2} for a restitution effect, which
 //!   changes what Cr means, or × the mobility factors on the dynamic friction alone for a resistance in contact
 //!   (rolling resistance, soft-ground and vegetation drag) and for roughness ([`super::effects::Recentring`]); for
-//!   a zone, the
-//!   candidate zones are derived from the training folds only and the zone material's mobility is stepped over
-//!   {0.2, 0.4, 0.7, 1.5} (in 3DRB also, at mobility 1, its soft-ground drag over {3, 10, 30} s⁻¹). A
+//!   a zone, the candidate zones are derived from the training folds only and the zone material's mobility is
+//!   stepped over {0.2, 0.4, 0.7, 1.5} (in 3DRB also, at mobility 1, its soft-ground drag over {3, 10, 30} s⁻¹). A
 //!   restitution effect is switched on *centred*: every material's Cr is divided by the effect's factor at the
 //!   current model's typical impact (median impact speed, median impact angle; the mass effect is neutral at the
 //!   median mass), so that the effect changes how restitution varies, not its typical level (ours).
