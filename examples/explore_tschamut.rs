@@ -33,6 +33,8 @@ use talus::calibrate::synthetic::material_params_3d;
 use talus::calibrate::zone::overrun_share;
 use talus::calibrate::{open_model, ModelKind};
 
+/// The shipped campaign, whose terrain every run uses (`--campaign` changes only the runs and blocks).
+const TSCHAMUT_DIR: &str = "meshes/tschamut2014";
 /// Simulations per run.
 const REPEATS: usize = 20;
 /// The lower edge of the proxy's LPS data (its 45 m padding removed), m.
@@ -40,7 +42,7 @@ const DATA_EDGE_Y_M: f64 = 130.0;
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
-    let (mut terrain_of, mut roughness_m, mut campaign) = (None, None, "meshes/tschamut2014".to_string());
+    let (mut terrain_of, mut roughness_m, mut campaign) = (None, None, TSCHAMUT_DIR.to_string());
     let mut floor: Option<[f64; 2]> = None;
     let per_run = args.first().is_some_and(|a| a == "--runs");
     if per_run {
@@ -52,8 +54,8 @@ fn main() {
             [flag, v] if flag == "--roughness-m" => roughness_m = Some(v.parse::<f64>().expect("a number")),
             [flag, v] if flag == "--campaign" => campaign = v.clone(),
             [flag, v] if flag == "--floor" => {
-                let f: Vec<f64> = v.split(',').map(|x| x.parse().expect("CR,DYNAMIC_DEG")).collect();
-                floor = Some([f[0], f[1]]);
+                let f: Vec<f64> = v.split(',').map(|x| x.parse().expect("--floor CR,DYNAMIC_DEG")).collect();
+                floor = Some(f.try_into().expect("--floor takes two numbers: CR,DYNAMIC_DEG"));
             }
             [flag, _] => panic!("unknown option {flag}"),
             _ => unreachable!(),
@@ -79,7 +81,7 @@ fn main() {
     cfg.simulation.effects.roughness_m = roughness_m;
     let model = open_model(
         dir,
-        Path::new("meshes/tschamut2014/terrain_proxy.asc"),
+        &Path::new(TSCHAMUT_DIR).join("terrain_proxy.asc"),
         ModelKind::Rigid3d,
         &cfg,
         "explore_tschamut",
@@ -160,7 +162,7 @@ fn main() {
                 run.block_id,
                 run.group,
                 run.runout_m,
-                r.runout_quantile(0.5),
+                r.median_runout(),
                 if (lo..=hi).contains(&run.runout_m) { "yes" } else { "no" },
                 run.rest_m[0],
                 run.rest_m[1]
