@@ -27,6 +27,18 @@ pub struct Diagnostic {
     pub n: usize,
 }
 
+impl Diagnostic {
+    /// What `spearman_rho` holds for this diagnostic, for labels: a rank correlation for covariates, the share of
+    /// runs outside their simulated range for the spread check, the largest excess for the zone check.
+    pub fn statistic_label(&self) -> &'static str {
+        match self.covariate.as_str() {
+            OUTSIDE_RANGE => "share",
+            DEPOSITION_EXCESS => "excess",
+            _ => "rho",
+        }
+    }
+}
+
 /// Per-run covariates, one column per name, rows in the order of the simulations.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Covariates {
@@ -132,6 +144,9 @@ pub fn diagnose(model: &dyn Model, sims: &[RunSims], permutations: usize, seed: 
 
 /// The covariate name of [`spread_check`].
 pub const OUTSIDE_RANGE: &str = "outside_simulated_range";
+
+/// The covariate name of the zone check's evidence (the largest deposition excess, [`super::maps::deposition_excess`]).
+pub const DEPOSITION_EXCESS: &str = "deposition_excess";
 
 /// The spread check (ours): are the observed run-outs outside the range of their own simulations more often than
 /// chance allows? If a run's simulations and its field run were exchangeable draws, the observed value's rank among

@@ -6,7 +6,7 @@
 //! this file only describes them to the loop and the report.
 
 use super::config::ModelKind;
-use super::diagnose::OUTSIDE_RANGE;
+use super::diagnose::{DEPOSITION_EXCESS, OUTSIDE_RANGE};
 use serde::{Deserialize, Serialize};
 
 /// An effect the loop can add.
@@ -174,7 +174,7 @@ const ZONE: EffectDef = EffectDef {
     param: None,
     grid: &ZONE_MOBILITY_GRID,
     bounds: (0.0, 0.0),
-    signature: &["deposition_excess"],
+    signature: &[DEPOSITION_EXCESS],
     formula: "a polygon (3DRB) or interval (2DLM) where observed runs stop and simulated ones do not, given its own fitted material, in 3DRB with its own soft-ground drag (ours: derived from the residual and deposition maps)",
 };
 

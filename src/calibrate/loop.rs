@@ -34,7 +34,7 @@
 //! the base parameters), and the loop starts again.
 
 use super::config::ModelKind;
-use super::diagnose::{diagnose, spread_check, Diagnostic};
+use super::diagnose::{diagnose, spread_check, Diagnostic, DEPOSITION_EXCESS};
 use super::effects::{
     definition, effects_for, recentring, EffectDef, EffectKind, Recentring, CR_SCALE_GRID, MOBILITY_GRID,
     ZONE_DRAG_GRID, ZONE_MOBILITY_GRID,
@@ -480,7 +480,7 @@ fn propose(
                     if p <= alpha && has_region {
                         let n_zones = current.effects.iter().filter(|e| e.kind == EffectKind::Zone).count();
                         let ev = Diagnostic {
-                            covariate: "deposition_excess".into(),
+                            covariate: DEPOSITION_EXCESS.into(),
                             residual: "rest_points".into(),
                             spearman_rho: stat,
                             p_value: p,

@@ -3,7 +3,7 @@
 
 use super::backanalysis::BackAnalysisRow;
 use super::config::CalibrationConfig;
-use super::diagnose::{covariates, residuals, Diagnostic, OUTSIDE_RANGE};
+use super::diagnose::{covariates, residuals, Diagnostic};
 use super::effects_loop::{AddedEffect, EffectTrial};
 use super::maps::residual_map;
 use super::metrics::{Metrics, MetricsSet};
@@ -590,10 +590,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
             let by: Vec<String> = t
                 .proposed_by
                 .iter()
-                .map(|d| {
-                    let stat = if d.covariate == OUTSIDE_RANGE { "share" } else { "rho" };
-                    format!("{} ({stat} {:.2}, p {:.3})", d.covariate, d.spearman_rho, d.p_value)
-                })
+                .map(|d| format!("{} ({} {:.2}, p {:.3})", d.covariate, d.statistic_label(), d.spearman_rho, d.p_value))
                 .collect();
             let _ = writeln!(
                 s,
