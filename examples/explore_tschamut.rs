@@ -12,12 +12,13 @@
 //! past it (`examples/tschamut_combined_level.toml`); their `release_attempts` and `materials_by` are used too (every
 //! material gets the parameters given; with `--floor CR,DYNAMIC_DEG` the material `floor` of `materials_by = "slope"`
 //! gets its own Cr and dynamic angle, its static angle the same step above it). `--roughness-m R` switches
-//! on size-relative ground roughness (`Effects::roughness_m`). `--campaign DIR` reads the runs and blocks from
+//! on size-relative ground roughness (`Effects::roughness_m`); `--effects "KEY = VALUE, ..."` any other effect, with
+//! the keys of `[simulation.effects]` (`"speed_restitution_k_mps = 6, rolling_resistance = 0.1"`, say). `--campaign DIR` reads the runs and blocks from
 //! another campaign folder on the same terrain (a copy with a changed `block_metadata.csv` `shape`, say); `--runs`
 //! (first) adds a table of every run: observed, simulated median and 5-95 % range, rest point.
 //!
 //! Run: cargo run --release --example explore_tschamut -- [--runs] [--terrain-of SETTINGS] [--roughness-m R]
-//!        [--campaign DIR] [--floor CR,DYNAMIC_DEG] CR CR_SD
+//!        [--effects "KEY = VALUE, ..."] [--campaign DIR] [--floor CR,DYNAMIC_DEG] CR CR_SD
 //!        STATIC_DEG DYNAMIC_DEG [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]
 //! e.g. `-- 0.30 0.06 35.4 20.3` (a W1 k-fold fold's baseline), `-- 0.30 0.06 35.4 14.0 10` (with vegetation drag)
 //! and `-- 0.175 0.127 42.3 18.5 5.65 3` (and a dynamic friction spread of 3° between rocks)
@@ -32,6 +33,7 @@ use talus::calibrate::stats::mean;
 use talus::calibrate::synthetic::material_params_3d;
 use talus::calibrate::zone::overrun_share;
 use talus::calibrate::{open_model, ModelKind};
+use talus::sim::params::Effects;
 
 /// The shipped campaign, whose terrain every run uses (`--campaign` changes only the runs and blocks).
 const TSCHAMUT_DIR: &str = "meshes/tschamut2014";
@@ -43,6 +45,7 @@ const DATA_EDGE_Y_M: f64 = 130.0;
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
     let (mut terrain_of, mut roughness_m, mut campaign) = (None, None, TSCHAMUT_DIR.to_string());
+    let mut effects = Effects::default();
     let mut floor: Option<[f64; 2]> = None;
     let per_run = args.first().is_some_and(|a| a == "--runs");
     if per_run {
@@ -53,6 +56,10 @@ fn main() {
             [flag, v] if flag == "--terrain-of" => terrain_of = Some(v.clone()),
             [flag, v] if flag == "--roughness-m" => roughness_m = Some(v.parse::<f64>().expect("a number")),
             [flag, v] if flag == "--campaign" => campaign = v.clone(),
+            [flag, v] if flag == "--effects" => {
+                effects = toml::from_str(&v.replace(',', "\n"))
+                    .unwrap_or_else(|e| panic!("--effects takes `name = value, ...` of the [simulation.effects] keys: {e}"))
+            }
             [flag, v] if flag == "--floor" => {
                 let f: Vec<f64> = v.split(',').map(|x| x.parse().expect("--floor CR,DYNAMIC_DEG")).collect();
                 floor = Some(f.try_into().expect("--floor takes two numbers: CR,DYNAMIC_DEG"));
@@ -64,7 +71,7 @@ fn main() {
     let args: Vec<f64> = args.iter().map(|a| a.parse().expect("numbers")).collect();
     if !(4..=6).contains(&args.len()) {
         eprintln!(
-            "usage: explore_tschamut [--runs] [--terrain-of SETTINGS] [--roughness-m R] [--campaign DIR] [--floor CR,DYN] CR CR_SD \
+            "usage: explore_tschamut [--runs] [--terrain-of SETTINGS] [--roughness-m R] [--effects \"KEY = VALUE, ...\"] [--campaign DIR] [--floor CR,DYN] CR CR_SD \
              STATIC_DEG DYNAMIC_DEG \
              [VEGETATION_DRAG_KG_S [DYNAMIC_FRICTION_SD_DEG]]"
         );
@@ -77,6 +84,7 @@ fn main() {
         cfg.terrain = settings.terrain;
         cfg.release_attempts = settings.release_attempts;
     }
+    cfg.simulation.effects = effects;
     cfg.simulation.effects.vegetation_drag_kg_s = args.get(4).copied().filter(|&c| c > 0.0);
     cfg.simulation.effects.roughness_m = roughness_m;
     let model = open_model(
