@@ -220,6 +220,7 @@ fn kfold_holds_every_run_out_once_and_pools_the_folds() {
     all.sort();
     assert_eq!(held, all, "every run is held out exactly once");
     assert_eq!(cv.baseline.overall.runs, model.runs().len());
+    assert!(cv.not_started.is_empty() && cv.final_started.is_none(), "every synthetic rock starts");
     let weighted: f64 =
         cv.folds.iter().map(|f| f.baseline_holdout.runout_mae_m * f.holdout_ids.len() as f64).sum::<f64>()
             / model.runs().len() as f64;
@@ -242,6 +243,7 @@ fn kfold_holds_every_run_out_once_and_pools_the_folds() {
     let spread = (mae.values[0] - mae.values[1]).abs() / std::f64::consts::SQRT_2;
     assert!((mae.mean - (mae.values[0] + mae.values[1]) / 2.0).abs() < 1e-12 && (mae.sd - spread).abs() < 1e-9);
     assert!(rep.summary.iter().any(|m| m.runs.starts_with("block ")), "per block as well");
+    assert!(!rep.summary.iter().any(|m| m.runs.ends_with(", started")), "no started-only rows when all start");
     assert!(out.path().join("repeat_2/fold_3/report.json").exists() && out.path().join("cv_repeats.md").exists());
 }
 

@@ -2,6 +2,7 @@
 //! [`calibrate`] that did not see it, the held-out errors pooled; and the study repeated over seeds.
 
 use super::metrics::{metrics_set, Metrics, MetricsSet};
+use super::model::RunSims;
 use super::runs::{assign_groups, FieldRun};
 use super::{calibrate, runs, split, stats, CalibrationConfig, Model};
 use crate::error::{Error, Result};
@@ -43,6 +44,14 @@ pub struct CrossValidation {
     /// The same for the final models.
     #[serde(rename = "final")]
     pub final_set: MetricsSet,
+    /// Held-out runs that no final simulation starts ([`runs::runs_not_started`]): the terrain or the recorded
+    /// release state holds the rock, whatever the parameters.
+    #[serde(default)]
+    pub not_started: Vec<String>,
+    /// The final held-out metrics over the other runs (`None` when every run starts), reported beside
+    /// [`Self::final_set`], never instead of it: what the parameters score where the model can start the rock (ours).
+    #[serde(default)]
+    pub final_started: Option<MetricsSet>,
     /// Wall time, s.
     pub total_s: f64,
 }
@@ -105,22 +114,37 @@ pub fn cross_validate(
         base_pool.extend(c.baseline_holdout);
         final_pool.extend(c.final_holdout);
     }
+    let (not_started, final_started) = started_only(runs, &final_pool);
     let cv = CrossValidation {
         model: model.kind().as_str().into(),
         k,
         folds,
         baseline: metrics_set(runs, &base_pool),
         final_set: metrics_set(runs, &final_pool),
+        not_started,
+        final_started,
         total_s: t0.elapsed().as_secs_f64(),
     };
     write_study(out, "cv_report", &cv, &cv_markdown(&cv))?;
     Ok(cv)
 }
 
+/// The runs of `pool` that no simulation starts, and the metrics of the others (`None` if there are none).
+fn started_only(runs: &[FieldRun], pool: &[RunSims]) -> (Vec<String>, Option<MetricsSet>) {
+    let not_started = runs::runs_not_started(runs, pool);
+    if not_started.is_empty() {
+        return (not_started, None);
+    }
+    let started: Vec<RunSims> = pool.iter().filter(|s| !not_started.contains(&runs[s.run].id)).cloned().collect();
+    let set = metrics_set(runs, &started);
+    (not_started, Some(set))
+}
+
 /// One held-out metric across the repeats of a k-fold cross-validation.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct MetricSpread {
-    /// `all` or `block ID`.
+    /// `all` or `block ID`, each followed by `, started` for the runs the model starts (only when some repeat
+    /// has a run not started, [`CrossValidation::not_started`]).
     pub runs: String,
     /// A [`Metrics`] name, e.g. `runout_mae_m`.
     pub metric: String,
@@ -170,16 +194,28 @@ pub fn repeated_cross_validation(
     }
     let mut summary = Vec::new();
     let blocks: Vec<String> = repeats[0].final_set.by_block.keys().cloned().collect();
-    for scope in std::iter::once(None).chain(blocks.iter().map(Some)) {
-        let per_repeat: Vec<[(&str, f64); 6]> = repeats
-            .iter()
-            .map(|cv| spread_metrics(scope.map_or(&cv.final_set.overall, |b| &cv.final_set.by_block[b])))
-            .collect();
+    // Each scope's metrics per repeat: all runs, each block, and the same without the runs not started where a
+    // repeat has any (a repeat without them counts its full figures there).
+    let scope = |set: &MetricsSet, block: Option<&String>| block.map_or(set.overall, |b| set.by_block[b]);
+    let mut scopes: Vec<(String, Vec<Metrics>)> = Vec::new();
+    let with_started = repeats.iter().any(|cv| cv.final_started.is_some());
+    for block in std::iter::once(None).chain(blocks.iter().map(Some)) {
+        let name = block.map_or("all".to_string(), |b| format!("block {b}"));
+        scopes.push((name.clone(), repeats.iter().map(|cv| scope(&cv.final_set, block)).collect()));
+        if with_started {
+            let started = |cv: &CrossValidation| {
+                let set = cv.final_started.as_ref().filter(|s| block.is_none_or(|b| s.by_block.contains_key(b)));
+                scope(set.unwrap_or(&cv.final_set), block)
+            };
+            scopes.push((format!("{name}, started"), repeats.iter().map(started).collect()));
+        }
+    }
+    for (runs, per_repeat) in scopes {
+        let per_repeat: Vec<[(&str, f64); 6]> = per_repeat.iter().map(spread_metrics).collect();
         for (i, (metric, _)) in per_repeat[0].iter().enumerate() {
             let values: Vec<f64> = per_repeat.iter().map(|m| m[i].1).collect();
             let (mean, sd) = (stats::mean(&values), stats::sample_sd(&values));
-            let runs = scope.map_or("all".to_string(), |b| format!("block {b}"));
-            summary.push(MetricSpread { runs, metric: metric.to_string(), values, mean, sd });
+            summary.push(MetricSpread { runs: runs.clone(), metric: metric.to_string(), values, mean, sd });
         }
     }
     let rcv = RepeatedCrossValidation {
@@ -274,11 +310,23 @@ fn cv_markdown(cv: &CrossValidation) -> String {
             m.scatter_floor_mae_m
         );
     };
-    for (name, set) in [("baseline", &cv.baseline), ("final", &cv.final_set)] {
+    let started_label = format!("final, without {} (not started)", cv.not_started.join(", "));
+    let started = cv.final_started.as_ref().map(|set| (started_label.as_str(), set));
+    for (name, set) in [("baseline", &cv.baseline), ("final", &cv.final_set)].into_iter().chain(started) {
         row(&mut s, name, &set.overall);
         for (b, m) in &set.by_block {
             row(&mut s, &format!("{name}, block {b}"), m);
         }
+    }
+    if !cv.not_started.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nNot started: every final simulation of {} ends within {} m of its release while the field rock ran; \
+             the terrain or the recorded release state holds it, so the rows without it show what the parameters \
+             score where the model can start the rock.",
+            cv.not_started.join(", "),
+            runs::NOT_STARTED_M
+        );
     }
     let _ = writeln!(
         s,
@@ -298,4 +346,25 @@ fn cv_markdown(cv: &CrossValidation) -> String {
         );
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::metrics::tests::{run, sims};
+
+    #[test]
+    fn runs_the_model_never_starts_are_scored_beside_the_others_not_instead() {
+        let runs = vec![run(0, 1, 50.0), run(1, 1, 60.0), run(2, 2, 40.0)];
+        let pool = vec![sims(0, &[48.0, 52.0]), sims(1, &[0.2, 0.4]), sims(2, &[39.0, 45.0])];
+        let (ids, started) = started_only(&runs, &pool);
+        assert_eq!(ids, vec!["r1".to_string()]);
+        let started = started.unwrap();
+        assert_eq!(started.overall.runs, 2);
+        // |50 − 50| and |40 − 42| over the two runs that start, against 60 − 0.3 added over all three.
+        assert!((started.overall.runout_mae_m - 1.0).abs() < 1e-12, "{:?}", started.overall);
+        assert!((metrics_set(&runs, &pool).overall.runout_mae_m - (2.0 + 59.7) / 3.0).abs() < 1e-12);
+        assert_eq!(started.by_block["b1"].runs, 1);
+        assert_eq!(started_only(&runs, &[pool[0].clone(), pool[2].clone()]), (vec![], None));
+    }
 }
