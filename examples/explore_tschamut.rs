@@ -57,8 +57,9 @@ fn main() {
             [flag, v] if flag == "--roughness-m" => roughness_m = Some(v.parse::<f64>().expect("a number")),
             [flag, v] if flag == "--campaign" => campaign = v.clone(),
             [flag, v] if flag == "--effects" => {
-                effects = toml::from_str(&v.replace(',', "\n"))
-                    .unwrap_or_else(|e| panic!("--effects takes `name = value, ...` of the [simulation.effects] keys: {e}"))
+                effects = toml::from_str(&v.replace(',', "\n")).unwrap_or_else(|e| {
+                    panic!("--effects takes `name = value, ...` of the [simulation.effects] keys: {e}")
+                })
             }
             [flag, v] if flag == "--floor" => {
                 let f: Vec<f64> = v.split(',').map(|x| x.parse().expect("--floor CR,DYNAMIC_DEG")).collect();
