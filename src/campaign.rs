@@ -4,6 +4,7 @@
 //! the line and the column.
 
 use crate::error::{Error, Result};
+use crate::io::csv_text::Lines;
 use crate::rock::{RockBody, RockSize, ShapeKind};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -71,17 +72,15 @@ struct Table {
 
 impl Table {
     fn read(path: &Path) -> Result<Table> {
-        let mut rdr = csv::ReaderBuilder::new()
-            .trim(csv::Trim::All)
-            .flexible(true)
-            .from_path(path)
-            .map_err(|e| csv_error(path, e))?;
+        let text = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        let lines = Lines::new(&text);
+        let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).flexible(true).from_reader(&text[..]);
         let header: Vec<String> =
-            rdr.headers().map_err(|e| csv_error(path, e))?.iter().map(|s| s.to_string()).collect();
+            rdr.headers().map_err(|e| csv_error(path, &lines, e))?.iter().map(|s| s.to_string()).collect();
         let mut rows = Vec::new();
         for rec in rdr.records() {
-            let rec = rec.map_err(|e| csv_error(path, e))?;
-            let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+            let rec = rec.map_err(|e| csv_error(path, &lines, e))?;
+            let line = lines.of(rec.position());
             if rec.iter().all(|f| f.is_empty()) {
                 continue;
             }
@@ -133,14 +132,10 @@ impl Table {
     }
 }
 
-fn csv_error(path: &Path, e: csv::Error) -> Error {
-    let line = e.position().map(|p| p.line() as usize);
-    match (e.kind(), line) {
-        (csv::ErrorKind::Io(_), _) => {
-            Error::format(path.display().to_string(), e.to_string(), "check that the file exists and is readable")
-        }
-        (_, Some(l)) => Error::at_line(path, l, e.to_string(), "fix the CSV syntax"),
-        _ => Error::format(path.display().to_string(), e.to_string(), "fix the CSV syntax"),
+fn csv_error(path: &Path, lines: &Lines, e: csv::Error) -> Error {
+    match lines.of(e.position()) {
+        0 => Error::format(path.display().to_string(), e.to_string(), "fix the CSV syntax"),
+        l => Error::at_line(path, l, e.to_string(), "fix the CSV syntax"),
     }
 }
 
@@ -232,6 +227,16 @@ impl Campaign {
                         "fix the trajectory_id",
                     ));
                 };
+                if let Some(b) = dep.col("block_id").and_then(|c| row.1.get(c)).filter(|b| !b.is_empty()) {
+                    if *b != rel.block_id {
+                        return Err(Error::at_line(
+                            &dep.path,
+                            row.0,
+                            format!("run '{tid}' rests as block '{b}' but was released as block '{}'", rel.block_id),
+                            "make block_id agree with release_points.csv (or leave it empty here)",
+                        ));
+                    }
+                }
                 let p = [
                     dep.number(row, x, "x_m")?,
                     dep.optional_number(row, "y_m")?.unwrap_or(0.0),
@@ -269,5 +274,54 @@ impl Campaign {
             },
         };
         RockBody::new(&kind, RockSize::DimensionsAndMass { size_m: block.size_m, mass_kg: block.mass_kg }, &field)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn campaign(release: &str, blocks: &str, deposition: &str) -> (tempfile::TempDir, Result<Campaign>) {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("release_points.csv"), release).unwrap();
+        std::fs::write(dir.path().join("block_metadata.csv"), blocks).unwrap();
+        std::fs::write(dir.path().join("observed_deposition.csv"), deposition).unwrap();
+        let c = Campaign::read(dir.path());
+        (dir, c)
+    }
+
+    const RELEASE: &str = "trajectory_id,x_m,y_m,z_m,block_id\nr1,0,0,10,1\nr2,0,1,10,2\n";
+    const BLOCKS: &str = "block_id,mass_kg,size_x_m,size_y_m,size_z_m\n1,69,0.37,0.32,0.37\n2,79,0.5,0.3,0.39\n";
+    const DEPOSITION: &str = "trajectory_id,x_m,y_m,z_m,block_id\nr1,20,0,0,1\nr2,25,1,0,2\n";
+
+    #[test]
+    fn errors_name_the_file_line_the_user_sees() {
+        let (_d, c) = campaign(RELEASE, BLOCKS, DEPOSITION);
+        let c = c.unwrap();
+        assert_eq!(c.depositions["r2"].runout_m, 25.0);
+        let err = |r: Result<Campaign>| r.unwrap_err().to_string();
+        let bad = BLOCKS.replace("79", "abc");
+        let (_d, c) = campaign(RELEASE, &bad, DEPOSITION);
+        let e = err(c);
+        assert!(e.contains("block_metadata.csv:3") && e.contains("mass_kg") && e.contains("abc"), "{e}");
+        let dup = format!("{RELEASE}r1,1,1,10,1\n");
+        let (_d, c) = campaign(&dup, BLOCKS, DEPOSITION);
+        let e = err(c);
+        assert!(e.contains("release_points.csv:4") && e.contains("twice"), "{e}");
+        // Windows line ends (the Tschamut files have them) count the same.
+        let (_d, c) = campaign(&dup.replace('\n', "\r\n"), &bad.replace('\n', "\r\n"), DEPOSITION);
+        let e = err(c);
+        assert!(e.contains("release_points.csv:4") && e.contains("twice"), "{e}");
+        let (_d, c) = campaign(RELEASE, &bad.replace('\n', "\r\n"), DEPOSITION);
+        let e = err(c);
+        assert!(e.contains("block_metadata.csv:3"), "{e}");
+    }
+
+    #[test]
+    fn a_rest_point_whose_block_differs_from_its_release_is_refused() {
+        let bad = DEPOSITION.replace("r2,25,1,0,2", "r2,25,1,0,1");
+        let (_d, c) = campaign(RELEASE, BLOCKS, &bad);
+        let e = c.unwrap_err().to_string();
+        assert!(e.contains("observed_deposition.csv:3") && e.contains("block") && e.contains("r2"), "{e}");
     }
 }

@@ -533,12 +533,14 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     assert!(String::from_utf8_lossy(&o.stdout).contains("runout_mae_m"));
     let md = std::fs::read_to_string(cv.join("cv_repeats.md")).unwrap();
     assert!(md.contains("| seed 1 | seed 2 | mean ± sd |") && cv.join("repeat_2/cv_report.json").is_file(), "{md}");
-    // An id that is not in the campaign: exit 2, and the message names the file and line.
+    // An id that is not in the campaign: exit 2, the message names the file and line, no output folder is made.
     std::fs::write(d.join("bad.txt"), "p001\nnope\n").unwrap();
-    let o = run(&["--holdout", d.join("bad.txt").to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let bad_out = d.join("bad_out");
+    let o = run(&["--holdout", d.join("bad.txt").to_str().unwrap(), "--out", bad_out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("bad.txt:2") && err.contains("nope"), "{err}");
+    assert!(!bad_out.exists());
     // An unknown settings key: exit 2, named.
     std::fs::write(d.join("settings.toml"), "repeatz = 3\n").unwrap();
     let o = run(&["--out", out.to_str().unwrap()]);

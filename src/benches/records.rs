@@ -21,6 +21,7 @@
 
 use super::stats::{wilson_interval, Z_95};
 use crate::error::{Error, Result};
+use crate::io::csv_text::Lines;
 use serde::Serialize;
 use std::path::Path;
 
@@ -69,9 +70,11 @@ const COLUMNS: [&str; 4] = ["bench_height_m", "bench_width_m", "face_angle_deg",
 /// I/O errors; a missing column (naming it); a value that is not a finite number, a negative width or run-out,
 /// a height that is not positive or an angle outside (0, 90] (naming the file, line and column); no records.
 pub fn read_records(path: &Path) -> Result<Vec<HistoricRecord>> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let text = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let lines = Lines::new(&text);
     let source = path.display().to_string();
-    let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).flexible(true).comment(Some(b'#')).from_reader(file);
+    let mut rdr =
+        csv::ReaderBuilder::new().trim(csv::Trim::All).flexible(true).comment(Some(b'#')).from_reader(&text[..]);
     let headers = rdr.headers().map_err(|e| Error::format(format!("{source}:1"), e.to_string(), "fix the header"))?;
     let mut idx = [0usize; 4];
     for (k, name) in COLUMNS.iter().enumerate() {
@@ -86,10 +89,9 @@ pub fn read_records(path: &Path) -> Result<Vec<HistoricRecord>> {
     let mut out = Vec::new();
     for rec in rdr.records() {
         let rec = rec.map_err(|e| {
-            let line = e.position().map_or(0, |p| p.line() as usize);
-            Error::at_line(path, line, e.to_string(), "fix the CSV syntax on this line")
+            Error::at_line(path, lines.of(e.position()), e.to_string(), "fix the CSV syntax on this line")
         })?;
-        let line = rec.position().map_or(0, |p| p.line() as usize);
+        let line = lines.of(rec.position());
         if rec.iter().all(|f| f.is_empty()) {
             continue;
         }

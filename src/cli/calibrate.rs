@@ -75,21 +75,25 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     cfg.validate(&source)?;
     let model = calibrate::open_model(&a.campaign, &a.terrain, kind, &cfg, &source)
         .with_context(|| format!("reading {}", a.campaign.display()))?;
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
-    let t0 = Instant::now();
-    let log = move |msg: &str| eprintln!("[{:6.1} s] {msg}", t0.elapsed().as_secs_f64());
     let runs = model.runs();
-    for [a, b] in calibrate::runs::duplicate_runs(runs) {
-        eprintln!("warning: runs {a} and {b} are the same record (release state and rest point); both are used, kept in one fold");
-    }
-    if let Some(k) = a.kfold {
+    // Every input is checked before the output folder is made.
+    let kfold = a.kfold.map(|k| if k == 0 { cfg.outer_folds } else { k });
+    if let Some(k) = kfold {
         if a.holdout.is_some() {
             anyhow::bail!("--kfold and --holdout exclude each other: the k-fold study holds out every run once");
         }
-        let k = if k == 0 { cfg.outer_folds } else { k };
         if k < 2 || k > runs.len() {
             anyhow::bail!("--kfold: must be between 2 and the number of runs ({})", runs.len());
         }
+    }
+    let held_out = a.holdout.as_ref().map(|p| split::read_holdout(p, runs).map(|h| (p, h))).transpose()?;
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    let t0 = Instant::now();
+    let log = move |msg: &str| eprintln!("[{:6.1} s] {msg}", t0.elapsed().as_secs_f64());
+    for [a, b] in calibrate::runs::duplicate_runs(runs) {
+        eprintln!("warning: runs {a} and {b} are the same record (release state and rest point); both are used, kept in one fold");
+    }
+    if let Some(k) = kfold {
         if cfg.outer_repeats > 1 {
             let r = calibrate::repeated_cross_validation(model.as_ref(), &cfg, k, &a.out, &log)?;
             println!(
@@ -109,9 +113,8 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         println!("wrote {}", a.out.join("cv_report.md").display());
         return Ok(());
     }
-    let (cal, hold, note) = match &a.holdout {
-        Some(p) => {
-            let hold = split::read_holdout(p, runs)?;
+    let (cal, hold, note) = match held_out {
+        Some((p, hold)) => {
             let cal: Vec<usize> = (0..runs.len()).filter(|i| !hold.contains(i)).collect();
             (cal, hold, format!("held-out runs from {}", p.display()))
         }

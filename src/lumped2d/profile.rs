@@ -15,6 +15,7 @@
 //! overhangs (x decreasing) are not. Extra columns are ignored.
 
 use crate::error::{Error, Result};
+use crate::io::csv_text::Lines;
 use crate::terrain::bench::{BenchGeometry, BenchPart};
 use std::io::Write;
 use std::path::Path;
@@ -115,8 +116,11 @@ impl Profile {
     ///
     /// # Errors
     /// Format errors that name `source` and the line.
-    pub fn from_csv_reader<R: std::io::Read>(reader: R, source: &str) -> Result<Profile> {
-        let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).flexible(true).from_reader(reader);
+    pub fn from_csv_reader<R: std::io::Read>(mut reader: R, source: &str) -> Result<Profile> {
+        let mut text = Vec::new();
+        reader.read_to_end(&mut text).map_err(|e| Error::io(source, e))?;
+        let line_index = Lines::new(&text);
+        let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).flexible(true).from_reader(&text[..]);
         let headers =
             rdr.headers().map_err(|e| Error::format(format!("{source}:1"), e.to_string(), "fix the header"))?;
         let col = |name: &str| headers.iter().position(|h| h == name);
@@ -133,10 +137,9 @@ impl Profile {
         let mut lines = Vec::new();
         for rec in rdr.records() {
             let rec = rec.map_err(|e| {
-                let line = e.position().map_or(0, |p| p.line() as usize);
-                Error::at_line(source, line, e.to_string(), "fix the CSV syntax on this line")
+                Error::at_line(source, line_index.of(e.position()), e.to_string(), "fix the CSV syntax on this line")
             })?;
-            let line = rec.position().map_or(0, |p| p.line() as usize);
+            let line = line_index.of(rec.position());
             if rec.iter().all(|f| f.is_empty()) {
                 continue;
             }
