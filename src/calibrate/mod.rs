@@ -31,6 +31,7 @@ pub mod objective;
 pub mod params;
 pub mod report;
 pub mod runs;
+pub mod scenario_file;
 pub mod search;
 pub mod split;
 pub mod stats;
@@ -240,6 +241,9 @@ pub fn calibrate(
     report.timing.simulations = ctx.simulations.load(std::sync::atomic::Ordering::Relaxed);
     if let Some(dir) = out {
         report::write_report(dir, &report, model, &base_cal, &final_cal, &base_hold, &final_hold, Some(&zc))?;
+        if let Some(text) = model.scenario_toml(&final_c, cfg.repeats, cfg.seed)? {
+            crate::io::atomic::write_bytes_atomic(&dir.join("calibrated.toml"), text.as_bytes())?;
+        }
     }
     Ok(Calibration { report, baseline_holdout: base_hold, final_holdout: final_hold })
 }

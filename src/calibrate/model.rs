@@ -140,6 +140,11 @@ pub trait Model: Sync {
     fn release_attempts(&self) -> usize;
     /// Applies a candidate.
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>>;
+    /// The model at `candidate` as a scenario file (TOML) that releases every campaign run `repeats` times with
+    /// `seed`, for `talus run`; `None` for a model not read from files (synthetic ones) or without such a command.
+    fn scenario_toml(&self, _candidate: &Candidate, _repeats: usize, _seed: u64) -> Result<Option<String>> {
+        Ok(None)
+    }
 }
 
 /// The random stream index of repeat `repeat` of the run at campaign position `index`.

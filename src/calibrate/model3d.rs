@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::random::{stream, TruncNormal};
 use crate::raster::Grid;
 use crate::rock::RockBody;
-use crate::scenario::{MaterialsBy, TerrainSpec};
+use crate::scenario::{MaterialsBy, TerrainSpec, ZoneSpec};
 use crate::sim::{simulate, Impact, Observer, Sample, SimParams, StopReason};
 use crate::source::measured_release;
 use crate::terrain::{horizontal_to_local, Material, Terrain};
@@ -32,6 +32,8 @@ pub struct Model3d {
     dem: Option<Grid>,
     median_mass_kg: f64,
     release_attempts: usize,
+    /// The campaign folder and the terrain as read, for [`Model::scenario_toml`] (`None` when built from parts).
+    files: Option<(std::path::PathBuf, TerrainSpec)>,
 }
 
 impl Model3d {
@@ -99,8 +101,10 @@ impl Model3d {
         for (id, block) in &campaign.blocks {
             bodies.insert(id.clone(), campaign.body(block)?);
         }
-        Ok(Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)?
-            .with_release_attempts(cfg.release_attempts))
+        let mut model = Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)?
+            .with_release_attempts(cfg.release_attempts);
+        model.files = Some((campaign.dir.clone(), spec));
+        Ok(model)
     }
 
     /// A model from a terrain already built (its materials name the calibrated materials), rock bodies by block
@@ -134,7 +138,18 @@ impl Model3d {
         let mut masses: Vec<f64> = runs.iter().map(|r| r.mass_kg).collect();
         masses.sort_by(|a, b| a.total_cmp(b));
         let median_mass_kg = masses.get(masses.len() / 2).copied().unwrap_or(100.0);
-        Ok(Model3d { runs, group_names, materials, terrain, bodies, sim, dem, median_mass_kg, release_attempts: 1 })
+        Ok(Model3d {
+            runs,
+            group_names,
+            materials,
+            terrain,
+            bodies,
+            sim,
+            dem,
+            median_mass_kg,
+            release_attempts: 1,
+            files: None,
+        })
     }
 
     /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model3d::from_parts`]).
@@ -255,6 +270,24 @@ impl Model for Model3d {
     }
 
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>> {
+        let (terrain, sim, _) = self.realize(candidate)?;
+        Ok(Box::new(Prepared3d { model: self, terrain, sim }))
+    }
+
+    fn scenario_toml(&self, candidate: &Candidate, repeats: usize, seed: u64) -> Result<Option<String>> {
+        let Some((campaign, spec)) = &self.files else {
+            return Ok(None);
+        };
+        let (terrain, sim, zones) = self.realize(candidate)?;
+        super::scenario_file::rigid_body_scenario(campaign, spec, &terrain.materials, zones, sim, repeats, seed)
+            .map(Some)
+    }
+}
+
+impl Model3d {
+    /// The terrain with the candidate's materials (and zones), the engine settings with its effects, and the zones
+    /// it adds as the scenario declares them.
+    fn realize(&self, candidate: &Candidate) -> Result<(Terrain, SimParams, Vec<ZoneSpec>)> {
         let p = &candidate.params;
         let m = p.mobility();
         let mut terrain = self.terrain.clone();
@@ -262,6 +295,7 @@ impl Model for Model3d {
             terrain.materials[k] = Self::material(p, name, name, m)?;
         }
         let mut sim = self.sim.clone();
+        let mut zones = Vec::new();
         let value = |label: &str, n: &str| {
             p.get(&format!("{label}.{n}")).ok_or_else(|| {
                 Error::invalid(
@@ -295,6 +329,9 @@ impl Model for Model3d {
                             "this is a bug in the calibration: please report it",
                         ));
                     };
+                    if let Region::Polygon(polygon) = region {
+                        zones.push(ZoneSpec { material: e.label.clone(), polygon: polygon.clone() });
+                    }
                     terrain.materials.push(Self::material(p, &e.label, &e.label, m)?);
                     let idx = (terrain.materials.len() - 1) as u16;
                     for t in 0..terrain.triangle_material.len() as u32 {
@@ -315,7 +352,7 @@ impl Model for Model3d {
             mat.validate(&format!("materials.{}", terrain.materials[k].name))?;
         }
         terrain.friction = terrain.materials.iter().map(|m| (m.mu_static(), m.mu_dynamic())).collect();
-        Ok(Box::new(Prepared3d { model: self, terrain, sim }))
+        Ok((terrain, sim, zones))
     }
 }
 
@@ -413,5 +450,70 @@ impl Observer for PathObserver3d<'_> {
         s.impact_speed_mean_mps += i.approach_speed_mps;
         s.impact_speed_max_mps = s.impact_speed_max_mps.max(i.approach_speed_mps);
         s.impact_angle_mean_deg += i.impact_angle_deg;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::{base_candidate, effects::EffectKind, params::EffectSpec, runs::field_runs};
+
+    /// `calibrated.toml` is the calibrated model: read back as `talus run` reads it, its terrain (with a zone the
+    /// loop added) has the same materials triangle by triangle and its engine the same settings and effects.
+    #[test]
+    fn the_calibrated_scenario_runs_the_calibrated_model() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/tschamut2014");
+        let mut cfg = CalibrationConfig::default();
+        cfg.terrain.level_beyond = Some(vec![[-40.0, 130.0], [185.0, 130.0], [185.0, 320.0], [-40.0, 320.0]]);
+        let campaign = Campaign::read(&dir).unwrap();
+        let (runs, groups) = field_runs(&campaign, cfg.group_link_m).unwrap();
+        let model = Model3d::new(&campaign, runs, groups, &dir.join("terrain_proxy.asc"), &cfg, "test").unwrap();
+        let (mut c, _) = base_candidate(&model, &cfg);
+        c.params.set("default.cr_mean", 0.27);
+        c.params.set("default.dynamic_friction_sd_deg", 3.0);
+        c.params.set("roughness.rough_m", 0.15);
+        c.effects.push(EffectSpec {
+            kind: EffectKind::Roughness,
+            label: "roughness".into(),
+            material: None,
+            region: None,
+        });
+        for (k, v) in [("cr_mean", 0.1), ("cr_sd", 0.02), ("static_friction_deg", 40.0), ("dynamic_friction_deg", 35.0)]
+        {
+            c.params.set(format!("zone1.{k}"), v);
+        }
+        c.params.set("zone1.drag_per_s", 4.0);
+        let zone = vec![[60.0, 140.0], [110.0, 140.0], [110.0, 180.0], [60.0, 180.0]];
+        c.effects.push(EffectSpec {
+            kind: EffectKind::Zone,
+            label: "zone1".into(),
+            material: None,
+            region: Some(Region::Polygon(zone)),
+        });
+        let text = model.scenario_toml(&c, 3, 7).unwrap().unwrap();
+        let out = tempfile::tempdir().unwrap();
+        let path = out.path().join("calibrated.toml");
+        std::fs::write(&path, &text).unwrap();
+        let sc = crate::scenario::ScenarioFile::read(&path).unwrap().resolve(&path).unwrap();
+        let terrain = crate::run::load_terrain(&sc).unwrap();
+        let (want, sim, _) = model.realize(&c).unwrap();
+        let names =
+            |t: &Terrain| t.triangle_material.iter().map(|&i| t.materials[i as usize].clone()).collect::<Vec<_>>();
+        assert_eq!(names(&terrain), names(&want), "{text}");
+        assert!(terrain.triangle_material.iter().any(|&i| terrain.materials[i as usize].name == "zone1"), "{text}");
+        assert_eq!(sc.file.simulation.params, sim, "{text}");
+        assert_eq!(sim.effects.roughness_m, Some(0.15));
+        assert_eq!(sc.file.simulation.seed, 7);
+        assert_eq!(sc.file.sources[0].repeats, Some(3));
+        // A model built from parts has no files to name: no scenario.
+        let parts = Model3d::from_parts(
+            Vec::new(),
+            Vec::new(),
+            model.terrain.clone(),
+            BTreeMap::new(),
+            SimParams::default(),
+            None,
+        );
+        assert!(parts.unwrap().scenario_toml(&c, 3, 7).unwrap().is_none());
     }
 }
