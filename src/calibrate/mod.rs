@@ -240,10 +240,18 @@ pub fn calibrate(
     report.timing.final_evaluation_s = report.timing.total_s - t_loop;
     report.timing.simulations = ctx.simulations.load(std::sync::atomic::Ordering::Relaxed);
     if let Some(dir) = out {
-        report::write_report(dir, &report, model, &base_cal, &final_cal, &base_hold, &final_hold, Some(&zc))?;
-        if let Some(text) = model.scenario_toml(&final_c, cfg.repeats, cfg.seed)? {
-            crate::io::atomic::write_bytes_atomic(&dir.join("calibrated.toml"), text.as_bytes())?;
-        }
+        let scenario = model.scenario_toml(&final_c, cfg.repeats, cfg.seed)?;
+        report::write_report(
+            dir,
+            &report,
+            model,
+            &base_cal,
+            &final_cal,
+            &base_hold,
+            &final_hold,
+            Some(&zc),
+            scenario.as_deref(),
+        )?;
     }
     Ok(Calibration { report, baseline_holdout: base_hold, final_holdout: final_hold })
 }

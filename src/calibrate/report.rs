@@ -157,7 +157,8 @@ impl From<&ZoneCheck> for ZoneSummary {
     }
 }
 
-/// Writes `report.json`, `report.md`, the charts and maps into `dir`.
+/// Writes `report.json`, `report.md`, the charts and maps into `dir`, and the final model as a scenario
+/// (`calibrated.toml`) when there is one ([`Model::scenario_toml`]).
 #[allow(clippy::too_many_arguments)]
 pub fn write_report(
     dir: &Path,
@@ -168,6 +169,7 @@ pub fn write_report(
     base_hold: &[RunSims],
     final_hold: &[RunSims],
     zone: Option<&ZoneCheck>,
+    scenario: Option<&str>,
 ) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let json = serde_json::to_string_pretty(report)
@@ -344,7 +346,10 @@ pub fn write_report(
             ));
         }
     }
-    let md = markdown(report, &figures);
+    if let Some(text) = scenario {
+        crate::io::write_bytes_atomic(&dir.join("calibrated.toml"), text.as_bytes())?;
+    }
+    let md = markdown(report, &figures, scenario.is_some());
     crate::io::write_bytes_atomic(&dir.join("report.md"), md.as_bytes())
 }
 
@@ -449,7 +454,7 @@ fn metrics_rows(s: &mut String, label: &str, m: &Metrics) {
 }
 
 /// The markdown report.
-pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
+pub fn markdown(r: &Report, figures: &[(String, String)], scenario: bool) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Calibration report ({})\n", r.model);
     let _ = writeln!(
@@ -520,6 +525,9 @@ pub fn markdown(r: &Report, figures: &[(String, String)]) -> String {
     for n in names {
         let g = |p: &Params| p.get(n).map(|v| format!("{v:.4}")).unwrap_or_else(|| "–".into());
         let _ = writeln!(s, "| {n} | {} | {} |", g(&r.baseline.parameters), g(&r.final_stage.parameters));
+    }
+    if scenario {
+        let _ = writeln!(s, "\nThe final model as a scenario: `calibrated.toml`. `talus run calibrated.toml --out MAP` re-runs the field releases with it; replace its `[[sources]]` to map another slope.");
     }
     let searches: Vec<super::fit::SearchRecord> =
         serde_json::from_value(r.population_fit["searches"].clone()).unwrap_or_default();
