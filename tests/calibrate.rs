@@ -466,6 +466,11 @@ fn profile_loop_adds_nothing_without_a_hidden_effect() {
 }
 
 /// Writes a synthetic profile campaign (no `y_m` column) and its `profile.csv` into `dir`.
+/// The number of observed runs in the campaign at `dir`.
+fn observed_runs(dir: &std::path::Path) -> usize {
+    talus::campaign::Campaign::read(dir).unwrap().depositions.len()
+}
+
 fn write_profile_campaign(dir: &std::path::Path) {
     let model =
         synthetic_2d(&Synthetic2d { seed: 5, runs_per_group: 3, ..Default::default() }, Options2d::default()).unwrap();
@@ -533,6 +538,18 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     assert!(String::from_utf8_lossy(&o.stdout).contains("runout_mae_m"));
     let md = std::fs::read_to_string(cv.join("cv_repeats.md")).unwrap();
     assert!(md.contains("| seed 1 | seed 2 | mean ± sd |") && cv.join("repeat_2/cv_report.json").is_file(), "{md}");
+    // Every run calibrates with --all-runs: no held-out ids, calibration metrics, and it excludes --holdout.
+    std::fs::write(d.join("settings.toml"), "max_evaluations = 20\n[back_analysis]\nenabled = false\n").unwrap();
+    let all = d.join("all");
+    let o = run(&["--all-runs", "--out", all.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(all.join("report.json")).unwrap()).unwrap();
+    assert_eq!(json["holdout_ids"], serde_json::json!([]));
+    assert_eq!(json["calibration_ids"].as_array().unwrap().len(), observed_runs(d));
+    assert!(json["final"]["calibration"]["runout_mae_m"].is_f64() && json["final"]["holdout"]["runs"] == 0);
+    let o = run(&["--all-runs", "--holdout", d.join("holdout.txt").to_str().unwrap(), "--out", all.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
     // An id that is not in the campaign: exit 2, the message names the file and line, no output folder is made.
     std::fs::write(d.join("bad.txt"), "p001\nnope\n").unwrap();
     let bad_out = d.join("bad_out");

@@ -433,6 +433,9 @@ pub fn aims(m: &Metrics) -> [bool; 4] {
 }
 
 fn metrics_rows(s: &mut String, label: &str, m: &Metrics) {
+    if m.runs == 0 {
+        return;
+    }
     let a = aims(m);
     let mark = |ok: bool| if ok { "" } else { " ✗" };
     let _ = writeln!(

@@ -8,7 +8,8 @@ use talus::calibrate::{self, split, CalibrationConfig, ModelKind};
 
 /// Calibrate a model on a field campaign, measure it on held-out runs, and add the effects it lacks.
 ///
-/// Writes DIR/report.json, DIR/report.md, charts and residual maps. With --kfold, runs an outer k-fold
+/// Writes DIR/report.json, DIR/report.md, charts and residual maps, and in 3DRB DIR/calibrated.toml (the final model
+/// as a scenario for `talus run`). With --kfold, runs an outer k-fold
 /// cross-validation over all runs instead (DIR/fold_i/ and DIR/cv_report.json); with --kfold-repeats R > 1, R of
 /// them with seeds seed, seed+1, ... (DIR/repeat_r/ and DIR/cv_repeats.json).
 ///
@@ -28,6 +29,10 @@ pub struct CalibrateArgs {
     /// File of held-out trajectory_ids, one per line (default: a seeded split, see holdout_fraction).
     #[arg(long)]
     holdout: Option<PathBuf>,
+    /// Calibrate on every run and hold none out: the final parameters (and calibrated.toml) once a --kfold study
+    /// has measured the held-out error of the same settings.
+    #[arg(long, conflicts_with_all = ["holdout", "kfold"])]
+    all_runs: bool,
     /// Settings file (TOML): free parameters and bounds, material map, repeats, seed, folds, effects.
     #[arg(long)]
     config: Option<PathBuf>,
@@ -114,6 +119,11 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     let (cal, hold, note) = match held_out {
+        None if a.all_runs => (
+            (0..runs.len()).collect(),
+            Vec::new(),
+            "no held-out runs (--all-runs): every run calibrates; the held-out error is a --kfold study's".to_string(),
+        ),
         Some((p, hold)) => {
             let cal: Vec<usize> = (0..runs.len()).filter(|i| !hold.contains(i)).collect();
             (cal, hold, format!("held-out runs from {}", p.display()))
@@ -131,7 +141,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
             )
         }
     };
-    if a.holdout.is_none() {
+    if a.holdout.is_none() && !a.all_runs {
         let ids: Vec<&str> = hold.iter().map(|&i| runs[i].id.as_str()).collect();
         eprintln!("{note}: {}", ids.join(" "));
     }
@@ -153,7 +163,12 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
             r.effects_added.iter().map(|e| e.label.clone()).collect::<Vec<_>>().join(", ")
         }
     );
-    println!("held-out runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m, runout_w1_m {:.2} -> {:.2} m, coverage_90 {:.2} -> {:.2}", b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, b.runout_w1_m, f.runout_w1_m, b.coverage_90, f.coverage_90);
+    let (set, b, f) = if hold.is_empty() {
+        ("calibration (no held-out runs: fitted on these numbers)", &r.baseline.calibration, &r.final_stage.calibration)
+    } else {
+        ("held-out", b, f)
+    };
+    println!("{set} runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m, runout_w1_m {:.2} -> {:.2} m, coverage_90 {:.2} -> {:.2}", b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, b.runout_w1_m, f.runout_w1_m, b.coverage_90, f.coverage_90);
     println!("wrote {}", a.out.join("report.md").display());
     Ok(())
 }
