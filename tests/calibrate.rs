@@ -41,6 +41,15 @@ fn shipped_calibration_settings_files_read() {
     }
 }
 
+/// The shipped calibrated Tschamut scenario reads as `talus run` reads it, with the campaign as its source.
+#[test]
+fn the_shipped_calibrated_tschamut_scenario_reads() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/calibrated_tschamut.toml");
+    let sc = talus::scenario::ScenarioFile::read(&path).unwrap().resolve(&path).unwrap();
+    assert_eq!(sc.file.sources[0].kind, talus::scenario::SourceKind::Campaign);
+    assert!(sc.file.simulation.params.effects.roughness_m.is_some() && sc.materials.len() == 1);
+}
+
 #[test]
 fn profile_campaign_recovers_rn_rt_and_friction() {
     let model =

@@ -69,7 +69,11 @@ pub fn rigid_body_scenario(
     doc.insert("title".into(), toml::Value::String(format!("calibrated on {}", campaign.display())));
     doc.insert("terrain".into(), value(&terrain)?);
     doc.insert("materials".into(), toml::Value::Table(materials));
-    doc.insert("sources".into(), toml::Value::Array(vec![value(&source)?]));
+    let mut source = value(&source)?;
+    if let toml::Value::Table(t) = &mut source {
+        t.remove("height_m"); // a campaign source releases at the measured state
+    }
+    doc.insert("sources".into(), toml::Value::Array(vec![source]));
     doc.insert("simulation".into(), simulation);
     let text = toml::to_string(&doc).map_err(|e| bug(e.to_string()))?;
     Ok(format!(
