@@ -3,7 +3,7 @@
 //! materials and effects.
 
 use crate::error::{Error, Result};
-use crate::scenario::{MaterialSpec, SourceKind, SourceSpec, TerrainSpec, ZoneSpec};
+use crate::scenario::{MaterialSpec, TerrainSpec, ZoneSpec};
 use crate::sim::SimParams;
 use crate::terrain::Material;
 use std::path::Path;
@@ -44,23 +44,6 @@ pub fn rigid_body_scenario(
             Ok((m.name.clone(), value(&spec)?))
         })
         .collect::<Result<_>>()?;
-    let source = SourceSpec {
-        name: Some("campaign".into()),
-        kind: SourceKind::Campaign,
-        points: Vec::new(),
-        material: None,
-        min_slope_deg: None,
-        max_slope_deg: None,
-        within: Vec::new(),
-        count: None,
-        density_per_m2: None,
-        height_m: 0.1,
-        velocity_mps: None,
-        speed_mps: None,
-        spin_radps: None,
-        campaign: Some(absolute(campaign)?),
-        repeats: Some(repeats),
-    };
     let mut simulation = value(&sim)?;
     if let toml::Value::Table(t) = &mut simulation {
         t.insert("seed".into(), toml::Value::Integer(seed as i64));
@@ -69,11 +52,13 @@ pub fn rigid_body_scenario(
     doc.insert("title".into(), toml::Value::String(format!("calibrated on {}", campaign.display())));
     doc.insert("terrain".into(), value(&terrain)?);
     doc.insert("materials".into(), toml::Value::Table(materials));
-    let mut source = value(&source)?;
-    if let toml::Value::Table(t) = &mut source {
-        t.remove("height_m"); // a campaign source releases at the measured state
-    }
-    doc.insert("sources".into(), toml::Value::Array(vec![source]));
+    // One campaign source (`SourceSpec`): each field run released `repeats` times from its measured state.
+    let mut source = toml::Table::new();
+    source.insert("name".into(), "campaign".into());
+    source.insert("type".into(), "campaign".into());
+    source.insert("campaign".into(), absolute(campaign)?.display().to_string().into());
+    source.insert("repeats".into(), toml::Value::Integer(repeats as i64));
+    doc.insert("sources".into(), toml::Value::Array(vec![toml::Value::Table(source)]));
     doc.insert("simulation".into(), simulation);
     let text = toml::to_string(&doc).map_err(|e| bug(e.to_string()))?;
     Ok(format!(
