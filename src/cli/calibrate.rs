@@ -147,7 +147,6 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     }
     let c = calibrate::calibrate(model.as_ref(), &cfg, &cal, &hold, &note, Some(&a.out), &log)?;
     let r = &c.report;
-    let (b, f) = (&r.baseline.holdout, &r.final_stage.holdout);
     println!(
         "{} calibration runs, {} held out; {} simulations in {:.0} s",
         cal.len(),
@@ -166,7 +165,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     let (set, b, f) = if hold.is_empty() {
         ("calibration (no held-out runs: fitted on these numbers)", &r.baseline.calibration, &r.final_stage.calibration)
     } else {
-        ("held-out", b, f)
+        ("held-out", &r.baseline.holdout, &r.final_stage.holdout)
     };
     println!("{set} runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m, runout_w1_m {:.2} -> {:.2} m, coverage_90 {:.2} -> {:.2}", b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, b.runout_w1_m, f.runout_w1_m, b.coverage_90, f.coverage_90);
     println!("wrote {}", a.out.join("report.md").display());
