@@ -84,6 +84,7 @@ fn main() {
         let settings = CalibrationConfig::read(Path::new(&file)).unwrap();
         cfg.terrain = settings.terrain;
         cfg.release_attempts = settings.release_attempts;
+        cfg.simulation = settings.simulation;
     }
     cfg.simulation.effects = effects;
     cfg.simulation.effects.vegetation_drag_kg_s = args.get(4).copied().filter(|&c| c > 0.0);

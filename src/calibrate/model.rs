@@ -12,6 +12,7 @@ use super::runs::{FieldRun, NOT_STARTED_M};
 use super::stats::{median, quantile_sorted, sorted};
 use crate::error::Result;
 use crate::raster::Grid;
+use std::path::Path;
 
 /// What a simulated path looked like, for the residual diagnosis.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -141,8 +142,15 @@ pub trait Model: Sync {
     /// Applies a candidate.
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>>;
     /// The model at `candidate` as a scenario file (TOML) that releases every campaign run `repeats` times with
-    /// `seed`, for `talus run`; `None` for a model not read from files (synthetic ones) or without such a command.
-    fn scenario_toml(&self, _candidate: &Candidate, _repeats: usize, _seed: u64) -> Result<Option<String>> {
+    /// `seed`, for `talus run`, naming its files relative to the existing folder `dir` it will be written into;
+    /// `None` for a model not read from files (synthetic ones) or without such a command.
+    fn scenario_toml(
+        &self,
+        _candidate: &Candidate,
+        _repeats: usize,
+        _seed: u64,
+        _dir: &Path,
+    ) -> Result<Option<String>> {
         Ok(None)
     }
 }

@@ -274,12 +274,12 @@ impl Model for Model3d {
         Ok(Box::new(Prepared3d { model: self, terrain, sim }))
     }
 
-    fn scenario_toml(&self, candidate: &Candidate, repeats: usize, seed: u64) -> Result<Option<String>> {
+    fn scenario_toml(&self, candidate: &Candidate, repeats: usize, seed: u64, dir: &Path) -> Result<Option<String>> {
         let Some((campaign, spec)) = &self.files else {
             return Ok(None);
         };
         let (terrain, sim, zones) = self.realize(candidate)?;
-        super::scenario_file::rigid_body_scenario(campaign, spec, &terrain.materials, zones, sim, repeats, seed)
+        super::scenario_file::rigid_body_scenario(dir, campaign, spec, &terrain.materials, zones, sim, repeats, seed)
             .map(Some)
     }
 }
@@ -490,8 +490,8 @@ mod tests {
             material: None,
             region: Some(Region::Polygon(zone)),
         });
-        let text = model.scenario_toml(&c, 3, 7).unwrap().unwrap();
         let out = tempfile::tempdir().unwrap();
+        let text = model.scenario_toml(&c, 3, 7, out.path()).unwrap().unwrap();
         let path = out.path().join("calibrated.toml");
         std::fs::write(&path, &text).unwrap();
         let sc = crate::scenario::ScenarioFile::read(&path).unwrap().resolve(&path).unwrap();
@@ -514,6 +514,6 @@ mod tests {
             SimParams::default(),
             None,
         );
-        assert!(parts.unwrap().scenario_toml(&c, 3, 7).unwrap().is_none());
+        assert!(parts.unwrap().scenario_toml(&c, 3, 7, out.path()).unwrap().is_none());
     }
 }

@@ -6,15 +6,18 @@ use crate::error::{Error, Result};
 use crate::scenario::{MaterialSpec, TerrainSpec, ZoneSpec};
 use crate::sim::SimParams;
 use crate::terrain::Material;
-use std::path::Path;
+use std::path::{Component, Path, PathBuf};
 
-/// A scenario (TOML text) of the 3DRB model: the terrain as the calibration read it (paths made absolute) with
-/// the zones the loop added, every material with its calibrated values, the engine settings with the effects, and
-/// one campaign source releasing each field run `repeats` times.
+/// A scenario (TOML text) of the 3DRB model, to be written into the folder `dir`: the terrain as the calibration
+/// read it with the zones the loop added, every material with its calibrated values, the engine settings with the
+/// effects, and one campaign source releasing each field run `repeats` times. Files are named relative to `dir`
+/// (see [`relative_path`]), so the file keeps working when the project folder holding both is moved or copied.
 ///
 /// # Errors
-/// A path that cannot be made absolute, or a value TOML cannot hold.
+/// A file or `dir` that cannot be found, or a value TOML cannot hold.
+#[allow(clippy::too_many_arguments)]
 pub fn rigid_body_scenario(
+    dir: &Path,
     campaign: &Path,
     terrain: &TerrainSpec,
     materials: &[Material],
@@ -23,9 +26,8 @@ pub fn rigid_body_scenario(
     repeats: usize,
     seed: u64,
 ) -> Result<String> {
-    let absolute = |p: &Path| std::path::absolute(p).map_err(|e| Error::io(p, e));
     let mut terrain = terrain.clone();
-    terrain.files = terrain.files.iter().map(|f| absolute(f)).collect::<Result<_>>()?;
+    terrain.files = terrain.files.iter().map(|f| relative_path(f, dir)).collect::<Result<_>>()?;
     terrain.zones.extend(zones);
     let materials: toml::Table = materials
         .iter()
@@ -56,7 +58,7 @@ pub fn rigid_body_scenario(
     let mut source = toml::Table::new();
     source.insert("name".into(), "campaign".into());
     source.insert("type".into(), "campaign".into());
-    source.insert("campaign".into(), absolute(campaign)?.display().to_string().into());
+    source.insert("campaign".into(), relative_path(campaign, dir)?.display().to_string().into());
     source.insert("repeats".into(), toml::Value::Integer(repeats as i64));
     doc.insert("sources".into(), toml::Value::Array(vec![toml::Value::Table(source)]));
     doc.insert("simulation".into(), simulation);
@@ -64,8 +66,28 @@ pub fn rigid_body_scenario(
     Ok(format!(
         "# The final model of `talus calibrate` as a scenario. `talus run THIS_FILE --out DIR` releases every field\n\
          # run {repeats} times (the same model as the calibration, with its own random numbers); replace [[sources]]\n\
-         # (and [terrain]) to map another slope with these materials and effects.\n{text}"
+         # (and [terrain]) to map another slope with these materials and effects. Paths are relative to this file.\n{text}"
     ))
+}
+
+/// `file` as a path relative to the folder `dir`, both as the file system resolves them (symbolic links and `..`
+/// followed): `../../meshes/site/terrain.asc` for `meshes/site/terrain.asc` seen from `outputs/run`. Absolute when
+/// the two share nothing but the root (a file on another disk, or an output folder under /tmp), where a chain of
+/// `..` up to the root would break as soon as either moved.
+///
+/// # Errors
+/// `file` or `dir` does not exist.
+pub fn relative_path(file: &Path, dir: &Path) -> Result<PathBuf> {
+    let file = std::fs::canonicalize(file).map_err(|e| Error::io(file, e))?;
+    let dir = std::fs::canonicalize(dir).map_err(|e| Error::io(dir, e))?;
+    let (f, d): (Vec<Component>, Vec<Component>) = (file.components().collect(), dir.components().collect());
+    let shared = f.iter().zip(&d).take_while(|(a, b)| a == b).count();
+    let rooted = |c: &Component| matches!(c, Component::Prefix(_) | Component::RootDir);
+    if f[..shared].iter().all(rooted) {
+        return Ok(file);
+    }
+    let up = std::iter::repeat_n(Component::ParentDir, d.len() - shared);
+    Ok(up.chain(f[shared..].iter().copied()).collect())
 }
 
 /// `v` as TOML without its empty lists and tables (the defaults a reader fills in).
@@ -87,4 +109,30 @@ fn value<T: serde::Serialize>(v: &T) -> Result<toml::Value> {
 
 fn bug(message: String) -> Error {
     Error::invalid("calibrated.toml", message, "this is a bug in the calibration: please report it")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn files_are_named_relative_to_the_output_folder_unless_only_the_root_is_shared() {
+        let root = tempfile::tempdir().unwrap();
+        let site = root.path().join("meshes/site");
+        let out = root.path().join("outputs/run");
+        std::fs::create_dir_all(&site).unwrap();
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(site.join("terrain.asc"), "").unwrap();
+        let rel = relative_path(&site.join("terrain.asc"), &out).unwrap();
+        assert_eq!(rel, Path::new("../../meshes/site/terrain.asc"));
+        assert!(out.join(&rel).is_file());
+        // Through `..` in what is given, and from inside the file's own folder.
+        assert_eq!(relative_path(&out.join("../../meshes/site"), &site).unwrap(), Path::new(""));
+        assert_eq!(relative_path(&site, &root.path().join("meshes")).unwrap(), Path::new("site"));
+        // Sharing only the root: absolute.
+        let abs = relative_path(&site.join("terrain.asc"), Path::new("/")).unwrap();
+        assert!(abs.is_absolute() && abs.ends_with("meshes/site/terrain.asc"), "{}", abs.display());
+        let e = relative_path(&site.join("missing.asc"), &out).unwrap_err().to_string();
+        assert!(e.contains("missing.asc"), "{e}");
+    }
 }
