@@ -4,7 +4,7 @@
 //! the line and the column.
 
 use crate::error::{Error, Result};
-use crate::io::csv_text::Lines;
+use crate::io::csv_text::Table;
 use crate::rock::{RockBody, RockSize, ShapeKind};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -63,97 +63,28 @@ pub struct Campaign {
     pub blocks: BTreeMap<String, Block>,
 }
 
-/// A parsed CSV: header and rows, with the file for error messages.
-struct Table {
-    path: PathBuf,
-    header: Vec<String>,
-    rows: Vec<(usize, Vec<String>)>,
-}
-
-impl Table {
-    fn read(path: &Path) -> Result<Table> {
-        let text = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-        let lines = Lines::new(&text);
-        let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).flexible(true).from_reader(&text[..]);
-        let header: Vec<String> =
-            rdr.headers().map_err(|e| csv_error(path, &lines, e))?.iter().map(|s| s.to_string()).collect();
-        let mut rows = Vec::new();
-        for rec in rdr.records() {
-            let rec = rec.map_err(|e| csv_error(path, &lines, e))?;
-            let line = lines.of(rec.position());
-            if rec.iter().all(|f| f.is_empty()) {
-                continue;
-            }
-            rows.push((line, rec.iter().map(|s| s.to_string()).collect()));
-        }
-        Ok(Table { path: path.to_path_buf(), header, rows })
-    }
-
-    fn col(&self, name: &str) -> Option<usize> {
-        self.header.iter().position(|h| h == name)
-    }
-
-    fn need(&self, name: &str) -> Result<usize> {
-        self.col(name).ok_or_else(|| {
-            Error::at_line(
-                &self.path,
-                1,
-                format!("the header has no column `{name}`"),
-                format!("add a `{name}` column (see the campaign format in README.md)"),
-            )
-        })
-    }
-
-    fn text(&self, row: &(usize, Vec<String>), col: usize, name: &str) -> Result<String> {
-        match row.1.get(col) {
-            Some(s) if !s.is_empty() => Ok(s.clone()),
-            _ => Err(Error::at_line(&self.path, row.0, format!("column `{name}` is empty"), "fill it in")),
-        }
-    }
-
-    fn number(&self, row: &(usize, Vec<String>), col: usize, name: &str) -> Result<f64> {
-        let s = self.text(row, col, name)?;
-        match s.parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(Error::at_line(
-                &self.path,
-                row.0,
-                format!("column `{name}` holds '{s}', not a finite number"),
-                "write a plain number in SI units",
-            )),
-        }
-    }
-
-    fn optional_number(&self, row: &(usize, Vec<String>), name: &str) -> Result<Option<f64>> {
-        match self.col(name) {
-            Some(c) if row.1.get(c).is_some_and(|s| !s.is_empty()) => Ok(Some(self.number(row, c, name)?)),
-            _ => Ok(None),
-        }
-    }
-}
-
-fn csv_error(path: &Path, lines: &Lines, e: csv::Error) -> Error {
-    match lines.of(e.position()) {
-        0 => Error::format(path.display().to_string(), e.to_string(), "fix the CSV syntax"),
-        l => Error::at_line(path, l, e.to_string(), "fix the CSV syntax"),
-    }
-}
+/// Hint for a missing campaign column.
+const COLUMN_HINT: &str = "add the column (see the campaign format in README.md)";
 
 impl Campaign {
     /// Reads `release_points.csv`, `observed_deposition.csv` (optional: a campaign to predict has none) and
     /// `block_metadata.csv` from `dir`.
     pub fn read(dir: &Path) -> Result<Campaign> {
-        let rel = Table::read(&dir.join("release_points.csv"))?;
+        let rel = Table::read(&dir.join("release_points.csv"), false)?;
         // `y_m` may be absent in a profile (2D) campaign: it is then 0.
-        let (id, x, z, b) = (rel.need("trajectory_id")?, rel.need("x_m")?, rel.need("z_m")?, rel.need("block_id")?);
+        let (id, x, z, b) = (
+            rel.need("trajectory_id", COLUMN_HINT)?,
+            rel.need("x_m", COLUMN_HINT)?,
+            rel.need("z_m", COLUMN_HINT)?,
+            rel.need("block_id", COLUMN_HINT)?,
+        );
         let mut releases = Vec::new();
         let mut seen = std::collections::BTreeSet::new();
         for row in &rel.rows {
-            let trajectory_id = rel.text(row, id, "trajectory_id")?;
+            let trajectory_id = rel.text(row, id, "trajectory_id")?.to_string();
             if !seen.insert(trajectory_id.clone()) {
-                return Err(Error::at_line(
-                    &rel.path,
-                    row.0,
+                return Err(rel.error(
+                    row,
                     format!("trajectory_id '{trajectory_id}' appears twice"),
                     "give every run its own id",
                 ));
@@ -164,46 +95,41 @@ impl Campaign {
                 position_m: [rel.number(row, x, "x_m")?, v("y_m")?, rel.number(row, z, "z_m")?],
                 velocity_mps: [v("vx_mps")?, v("vy_mps")?, v("vz_mps")?],
                 spin_radps: [v("wx_radps")?, v("wy_radps")?, v("wz_radps")?],
-                block_id: rel.text(row, b, "block_id")?,
+                block_id: rel.text(row, b, "block_id")?.to_string(),
             });
         }
         if releases.is_empty() {
-            return Err(Error::format(
-                rel.path.display().to_string(),
-                "holds no release",
-                "add one row per released rock",
-            ));
+            return Err(Error::format(rel.source.clone(), "holds no release", "add one row per released rock"));
         }
-        let blk = Table::read(&dir.join("block_metadata.csv"))?;
-        let (bid, m) = (blk.need("block_id")?, blk.need("mass_kg")?);
-        let (sx, sy, sz) = (blk.need("size_x_m")?, blk.need("size_y_m")?, blk.need("size_z_m")?);
+        let blk = Table::read(&dir.join("block_metadata.csv"), false)?;
+        let (bid, m) = (blk.need("block_id", COLUMN_HINT)?, blk.need("mass_kg", COLUMN_HINT)?);
+        let (sx, sy, sz) = (
+            blk.need("size_x_m", COLUMN_HINT)?,
+            blk.need("size_y_m", COLUMN_HINT)?,
+            blk.need("size_z_m", COLUMN_HINT)?,
+        );
         let mut blocks = BTreeMap::new();
         for row in &blk.rows {
             let block = Block {
-                block_id: blk.text(row, bid, "block_id")?,
-                name: blk.col("name").and_then(|c| row.1.get(c).cloned()).unwrap_or_default(),
+                block_id: blk.text(row, bid, "block_id")?.to_string(),
+                name: blk.field(row, blk.col("name")).to_string(),
                 mass_kg: blk.number(row, m, "mass_kg")?,
                 size_m: [
                     blk.number(row, sx, "size_x_m")?,
                     blk.number(row, sy, "size_y_m")?,
                     blk.number(row, sz, "size_z_m")?,
                 ],
-                shape: blk.col("shape").and_then(|c| row.1.get(c).cloned()).unwrap_or_default(),
+                shape: blk.field(row, blk.col("shape")).to_string(),
             };
             if block.mass_kg <= 0.0 || block.size_m.iter().any(|&s| s <= 0.0) {
-                return Err(Error::at_line(
-                    &blk.path,
-                    row.0,
-                    "mass and sizes must be positive",
-                    "fix the block's mass_kg and size_*_m",
-                ));
+                return Err(blk.error(row, "mass and sizes must be positive", "fix the block's mass_kg and size_*_m"));
             }
             blocks.insert(block.block_id.clone(), block);
         }
         for r in &releases {
             if !blocks.contains_key(&r.block_id) {
                 return Err(Error::format(
-                    rel.path.display().to_string(),
+                    rel.source.clone(),
                     format!(
                         "run '{}' uses block '{}', which block_metadata.csv does not list",
                         r.trajectory_id, r.block_id
@@ -215,27 +141,25 @@ impl Campaign {
         let mut depositions = BTreeMap::new();
         let dep_path = dir.join("observed_deposition.csv");
         if dep_path.is_file() {
-            let dep = Table::read(&dep_path)?;
-            let (id, x, z) = (dep.need("trajectory_id")?, dep.need("x_m")?, dep.need("z_m")?);
+            let dep = Table::read(&dep_path, false)?;
+            let (id, x, z) =
+                (dep.need("trajectory_id", COLUMN_HINT)?, dep.need("x_m", COLUMN_HINT)?, dep.need("z_m", COLUMN_HINT)?);
             for row in &dep.rows {
-                let tid = dep.text(row, id, "trajectory_id")?;
+                let tid = dep.text(row, id, "trajectory_id")?.to_string();
                 let Some(rel) = releases.iter().find(|r| r.trajectory_id == tid) else {
-                    return Err(Error::at_line(
-                        &dep.path,
-                        row.0,
+                    return Err(dep.error(
+                        row,
                         format!("run '{tid}' has no release in release_points.csv"),
                         "fix the trajectory_id",
                     ));
                 };
-                if let Some(b) = dep.col("block_id").and_then(|c| row.1.get(c)).filter(|b| !b.is_empty()) {
-                    if *b != rel.block_id {
-                        return Err(Error::at_line(
-                            &dep.path,
-                            row.0,
-                            format!("run '{tid}' rests as block '{b}' but was released as block '{}'", rel.block_id),
-                            "make block_id agree with release_points.csv (or leave it empty here)",
-                        ));
-                    }
+                let b = dep.field(row, dep.col("block_id"));
+                if !b.is_empty() && b != rel.block_id {
+                    return Err(dep.error(
+                        row,
+                        format!("run '{tid}' rests as block '{b}' but was released as block '{}'", rel.block_id),
+                        "make block_id agree with release_points.csv (or leave it empty here)",
+                    ));
                 }
                 let p = [
                     dep.number(row, x, "x_m")?,

@@ -21,7 +21,7 @@
 
 use super::stats::{wilson_interval, Z_95};
 use crate::error::{Error, Result};
-use crate::io::csv_text::Lines;
+use crate::io::csv_text::Table;
 use serde::Serialize;
 use std::path::Path;
 
@@ -70,46 +70,20 @@ const COLUMNS: [&str; 4] = ["bench_height_m", "bench_width_m", "face_angle_deg",
 /// I/O errors; a missing column (naming it); a value that is not a finite number, a negative width or run-out,
 /// a height that is not positive or an angle outside (0, 90] (naming the file, line and column); no records.
 pub fn read_records(path: &Path) -> Result<Vec<HistoricRecord>> {
-    let text = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let lines = Lines::new(&text);
-    let source = path.display().to_string();
-    let mut rdr =
-        csv::ReaderBuilder::new().trim(csv::Trim::All).flexible(true).comment(Some(b'#')).from_reader(&text[..]);
-    let headers = rdr.headers().map_err(|e| Error::format(format!("{source}:1"), e.to_string(), "fix the header"))?;
-    let mut idx = [0usize; 4];
+    let t = Table::read(path, true)?;
+    let hint = format!("start the file with the header {}", COLUMNS.join(","));
+    let mut idx = [0; 4];
     for (k, name) in COLUMNS.iter().enumerate() {
-        idx[k] = headers.iter().position(|h| h == *name).ok_or_else(|| {
-            Error::format(
-                format!("{source}:1"),
-                format!("the column {name} is missing (found: {})", headers.iter().collect::<Vec<_>>().join(",")),
-                format!("start the file with the header {}", COLUMNS.join(",")),
-            )
-        })?;
+        idx[k] = t.need(name, &hint)?;
     }
     let mut out = Vec::new();
-    for rec in rdr.records() {
-        let rec = rec.map_err(|e| {
-            Error::at_line(path, lines.of(e.position()), e.to_string(), "fix the CSV syntax on this line")
-        })?;
-        let line = lines.of(rec.position());
-        if rec.iter().all(|f| f.is_empty()) {
-            continue;
-        }
+    for row in &t.rows {
         let mut v = [0.0; 4];
         for (k, name) in COLUMNS.iter().enumerate() {
-            let s = rec.get(idx[k]).unwrap_or("");
-            v[k] = s.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-                Error::at_line(
-                    path,
-                    line,
-                    format!("{name} = '{s}' is not a number"),
-                    format!("give {name} as a plain number"),
-                )
-            })?;
+            v[k] = t.number(row, idx[k], name)?;
         }
         let [h, w, a, r] = v;
-        let bad =
-            |name: &str, what: &str| Error::at_line(path, line, format!("{name} must be {what}"), "fix the value");
+        let bad = |name: &str, what: &str| t.error(row, format!("{name} must be {what}"), "fix the value");
         if h <= 0.0 {
             return Err(bad("bench_height_m", "positive"));
         }
@@ -125,7 +99,7 @@ pub fn read_records(path: &Path) -> Result<Vec<HistoricRecord>> {
         out.push(HistoricRecord { bench_height_m: h, bench_width_m: w, face_angle_deg: a, runout_m: r });
     }
     if out.is_empty() {
-        return Err(Error::format(source, "holds no records", "add one row per historic event"));
+        return Err(Error::format(t.source, "holds no records", "add one row per historic event"));
     }
     Ok(out)
 }
@@ -190,7 +164,7 @@ mod tests {
         let obs = observed_capture(&sel, &[4.0, 10.0]);
         assert_eq!((obs[0].captured, obs[1].captured), (1, 2));
         std::fs::write(&path, "bench_height_m,bench_width_m,face_angle_deg\n20,7,60\n").unwrap();
-        assert!(read_records(&path).unwrap_err().to_string().contains("runout_m is missing"));
+        assert!(read_records(&path).unwrap_err().to_string().contains("no column `runout_m`"));
         std::fs::write(&path, "bench_height_m,bench_width_m,face_angle_deg,runout_m\n20,7,60,-1\n").unwrap();
         let e = read_records(&path).unwrap_err().to_string();
         assert!(e.contains("r.csv:2") && e.contains("runout_m"), "{e}");

@@ -1,28 +1,163 @@
-//! CSV text: fields written by hand (RFC 4180 quoting; empty for numbers that are not finite), and the file line
-//! of a record read with the `csv` crate.
+//! CSV text: fields written by hand (RFC 4180 quoting; empty for numbers that are not finite), and tables read
+//! with the `csv` crate whose rows know their file line.
 
-/// The lines of a CSV text, to name the line of a record. The `csv` crate's own `Position::line` is one short after
+use crate::error::{Error, Result};
+use std::path::Path;
+
+/// A CSV file read whole: its header and its rows, fields trimmed, rows of empty fields skipped, each row with
+/// the file line it came from, so that every reader names the line of a bad value the same way.
+#[derive(Debug)]
+pub struct Table {
+    /// The file (or other source) the table came from, for error messages.
+    pub source: String,
+    /// Column names.
+    pub header: Vec<String>,
+    /// Rows with their 1-based file line.
+    pub rows: Vec<Row>,
+}
+
+/// One row of a [`Table`].
+#[derive(Debug)]
+pub struct Row {
+    /// 1-based line in the file.
+    pub line: usize,
+    /// Fields, trimmed; a row may have fewer or more than the header.
+    pub fields: Vec<String>,
+}
+
+impl Table {
+    /// Reads the CSV file `path`; with `comments`, lines starting with `#` are skipped.
+    ///
+    /// # Errors
+    /// I/O errors, and CSV syntax errors naming the file and line.
+    pub fn read(path: &Path, comments: bool) -> Result<Table> {
+        let text = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        Table::parse(&text, &path.display().to_string(), comments)
+    }
+
+    /// Parses CSV `text`; `source` names it in errors.
+    ///
+    /// # Errors
+    /// CSV syntax errors naming `source` and the line.
+    pub fn parse(text: &[u8], source: &str, comments: bool) -> Result<Table> {
+        let lines = Lines::new(text, comments);
+        let syntax = |e: csv::Error| match lines.of(e.position()) {
+            0 => Error::format(source, e.to_string(), "fix the CSV syntax"),
+            l => Error::at_line(source, l, e.to_string(), "fix the CSV syntax on this line"),
+        };
+        let mut rdr = csv::ReaderBuilder::new()
+            .trim(csv::Trim::All)
+            .flexible(true)
+            .comment(comments.then_some(b'#'))
+            .from_reader(text);
+        let header = rdr.headers().map_err(syntax)?.iter().map(str::to_string).collect();
+        let mut rows = Vec::new();
+        for rec in rdr.records() {
+            let rec = rec.map_err(syntax)?;
+            if rec.iter().any(|f| !f.is_empty()) {
+                rows.push(Row { line: lines.of(rec.position()), fields: rec.iter().map(str::to_string).collect() });
+            }
+        }
+        Ok(Table { source: source.to_string(), header, rows })
+    }
+
+    /// The index of column `name`, if the header has it.
+    pub fn col(&self, name: &str) -> Option<usize> {
+        self.header.iter().position(|h| h == name)
+    }
+
+    /// The index of column `name`.
+    ///
+    /// # Errors
+    /// The header has no such column: an error at line 1 listing the columns found, with `hint`.
+    pub fn need(&self, name: &str, hint: &str) -> Result<usize> {
+        self.col(name).ok_or_else(|| {
+            Error::at_line(
+                &self.source,
+                1,
+                format!("the header has no column `{name}` (found: {})", self.header.join(",")),
+                hint,
+            )
+        })
+    }
+
+    /// An error at `row`'s line.
+    pub fn error(&self, row: &Row, message: impl Into<String>, hint: impl Into<String>) -> Error {
+        Error::at_line(&self.source, row.line, message, hint)
+    }
+
+    /// The field of column `col` (named `name`) in `row`; empty when the row is short.
+    pub fn field<'r>(&self, row: &'r Row, col: Option<usize>) -> &'r str {
+        col.and_then(|c| row.fields.get(c)).map_or("", String::as_str)
+    }
+
+    /// The non-empty field of column `col` (named `name`) in `row`.
+    ///
+    /// # Errors
+    /// The field is empty, naming the file, line and column.
+    pub fn text<'r>(&self, row: &'r Row, col: usize, name: &str) -> Result<&'r str> {
+        match self.field(row, Some(col)) {
+            "" => Err(self.error(row, format!("column `{name}` is empty"), "fill it in")),
+            s => Ok(s),
+        }
+    }
+
+    /// The finite number in column `col` (named `name`) of `row`.
+    ///
+    /// # Errors
+    /// The field is empty or not a finite number, naming the file, line and column.
+    pub fn number(&self, row: &Row, col: usize, name: &str) -> Result<f64> {
+        let s = self.text(row, col, name)?;
+        s.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+            self.error(
+                row,
+                format!("column `{name}` holds '{s}', not a finite number"),
+                "write a plain number in SI units",
+            )
+        })
+    }
+
+    /// The number in column `name` of `row`, `None` when the header has no such column or the field is empty.
+    ///
+    /// # Errors
+    /// A field that is not a finite number.
+    pub fn optional_number(&self, row: &Row, name: &str) -> Result<Option<f64>> {
+        match self.col(name) {
+            Some(c) if !self.field(row, Some(c)).is_empty() => Ok(Some(self.number(row, c, name)?)),
+            _ => Ok(None),
+        }
+    }
+}
+
+/// The lines of a CSV text, to name the line of a record (used by [`Table`]). The `csv` crate's own `Position::line` is one short after
 /// a header ended by CRLF (csv 1.4; the Tschamut files have CRLF), and a record's byte offset is where its
-/// reading began: before the line end of the record above and any blank lines. The record's line is that of its
-/// first byte past them.
-pub struct Lines<'a> {
+/// reading began: before the line end of the record above and any blank or comment lines. The record's line is
+/// that of its first byte past them.
+struct Lines<'a> {
     text: &'a [u8],
     starts: Vec<usize>,
+    comments: bool,
 }
 
 impl<'a> Lines<'a> {
     /// Indexes the line starts of `text`.
-    pub fn new(text: &'a [u8]) -> Lines<'a> {
+    fn new(text: &'a [u8], comments: bool) -> Lines<'a> {
         let breaks = text.iter().enumerate().filter(|(_, &b)| b == b'\n').map(|(i, _)| i + 1);
-        Lines { text, starts: std::iter::once(0).chain(breaks).collect() }
+        Lines { text, starts: std::iter::once(0).chain(breaks).collect(), comments }
     }
 
     /// The 1-based line at a record's (or an error's) position; 0 when there is none.
-    pub fn of(&self, position: Option<&csv::Position>) -> usize {
+    fn of(&self, position: Option<&csv::Position>) -> usize {
         position.map_or(0, |p| {
             let mut b = (p.byte() as usize).min(self.text.len());
-            while self.text.get(b).is_some_and(|c| matches!(c, b'\r' | b'\n')) {
-                b += 1;
+            loop {
+                match self.text.get(b) {
+                    Some(b'\r' | b'\n') => b += 1,
+                    Some(b'#') if self.comments => {
+                        b = self.text[b..].iter().position(|&c| c == b'\n').map_or(self.text.len(), |i| b + i + 1)
+                    }
+                    _ => break,
+                }
             }
             self.starts.partition_point(|&start| start <= b)
         })
@@ -60,12 +195,19 @@ mod tests {
     }
 
     #[test]
-    fn records_are_placed_on_their_file_line_with_either_line_end() {
-        for text in ["a,b\n1,2\n\n3,4\n", "a,b\r\n1,2\r\n\r\n3,4\r\n"] {
-            let lines = Lines::new(text.as_bytes());
-            let mut rdr = csv::ReaderBuilder::new().from_reader(text.as_bytes());
-            let found: Vec<usize> = rdr.records().map(|r| lines.of(r.unwrap().position())).collect();
-            assert_eq!(found, [2, 4], "{text:?}");
+    fn rows_are_placed_on_their_file_line_with_either_line_end() {
+        for text in ["a,b\n1,2\n\n , \n3,x\n", "a,b\r\n1,2\r\n\r\n , \r\n3,x\r\n"] {
+            let t = Table::parse(text.as_bytes(), "t.csv", false).unwrap();
+            assert_eq!(t.rows.iter().map(|r| r.line).collect::<Vec<_>>(), [2, 5], "{text:?}");
+            assert_eq!(t.number(&t.rows[0], 1, "b").unwrap(), 2.0);
+            let e = t.number(&t.rows[1], 1, "b").unwrap_err().to_string();
+            assert!(e.contains("t.csv:5") && e.contains("'x'"), "{e}");
+            let e = t.need("c", "add it").unwrap_err().to_string();
+            assert!(e.contains("t.csv:1") && e.contains("`c`") && e.contains("found: a,b"), "{e}");
         }
+        let t = Table::parse(b"# note\na\n# again\n1\n", "t.csv", true).unwrap();
+        assert_eq!((t.header.clone(), t.rows[0].line), (vec!["a".to_string()], 4));
+        let e = Table::parse(b"a\n1\n\xff\n", "t.csv", false).unwrap_err().to_string();
+        assert!(e.contains("t.csv:3") && e.contains("UTF-8"), "{e}");
     }
 }

@@ -15,7 +15,7 @@
 //! overhangs (x decreasing) are not. Extra columns are ignored.
 
 use crate::error::{Error, Result};
-use crate::io::csv_text::Lines;
+use crate::io::csv_text::Table;
 use crate::terrain::bench::{BenchGeometry, BenchPart};
 use std::io::Write;
 use std::path::Path;
@@ -119,44 +119,16 @@ impl Profile {
     pub fn from_csv_reader<R: std::io::Read>(mut reader: R, source: &str) -> Result<Profile> {
         let mut text = Vec::new();
         reader.read_to_end(&mut text).map_err(|e| Error::io(source, e))?;
-        let line_index = Lines::new(&text);
-        let mut rdr = csv::ReaderBuilder::new().trim(csv::Trim::All).flexible(true).from_reader(&text[..]);
-        let headers =
-            rdr.headers().map_err(|e| Error::format(format!("{source}:1"), e.to_string(), "fix the header"))?;
-        let col = |name: &str| headers.iter().position(|h| h == name);
-        let (Some(ix), Some(iz)) = (col("x_m"), col("z_m")) else {
-            return Err(Error::format(
-                format!("{source}:1"),
-                format!("the header must contain x_m and z_m, found: {}", headers.iter().collect::<Vec<_>>().join(",")),
-                "start the file with the line `x_m,z_m,material`",
-            ));
-        };
-        let imat = col("material");
+        let t = Table::parse(&text, source, false)?;
+        let hint = "start the file with the line `x_m,z_m,material`";
+        let (ix, iz, imat) = (t.need("x_m", hint)?, t.need("z_m", hint)?, t.col("material"));
         let mut vertices = Vec::new();
         let mut mats: Vec<String> = Vec::new();
         let mut lines = Vec::new();
-        for rec in rdr.records() {
-            let rec = rec.map_err(|e| {
-                Error::at_line(source, line_index.of(e.position()), e.to_string(), "fix the CSV syntax on this line")
-            })?;
-            let line = line_index.of(rec.position());
-            if rec.iter().all(|f| f.is_empty()) {
-                continue;
-            }
-            let num = |i: usize, name: &str| -> Result<f64> {
-                let s = rec.get(i).unwrap_or("");
-                s.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
-                    Error::at_line(
-                        source,
-                        line,
-                        format!("{name} = '{s}' is not a finite number"),
-                        format!("give {name} in metres as a plain number"),
-                    )
-                })
-            };
-            vertices.push([num(ix, "x_m")?, num(iz, "z_m")?]);
-            mats.push(imat.and_then(|i| rec.get(i)).unwrap_or("").to_string());
-            lines.push(line);
+        for row in &t.rows {
+            vertices.push([t.number(row, ix, "x_m")?, t.number(row, iz, "z_m")?]);
+            mats.push(t.field(row, imat).to_string());
+            lines.push(row.line);
         }
         if vertices.len() < 2 {
             return Err(Error::format(
