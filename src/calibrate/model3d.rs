@@ -459,7 +459,8 @@ mod tests {
     use crate::calibrate::{base_candidate, effects::EffectKind, params::EffectSpec, runs::field_runs};
 
     /// `calibrated.toml` is the calibrated model: read back as `talus run` reads it, its terrain (with a zone the
-    /// loop added) has the same materials triangle by triangle and its engine the same settings and effects.
+    /// loop added) has the same materials triangle by triangle and its engine the same settings and effects; it
+    /// names its files relative to its own folder.
     #[test]
     fn the_calibrated_scenario_runs_the_calibrated_model() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/tschamut2014");
@@ -490,8 +491,14 @@ mod tests {
             material: None,
             region: Some(Region::Polygon(zone)),
         });
-        let out = tempfile::tempdir().unwrap();
+        // Written beside the campaign (under target/), so its files are named relative to it.
+        let out = tempfile::tempdir_in(Path::new(env!("CARGO_MANIFEST_DIR")).join("target")).unwrap();
         let text = model.scenario_toml(&c, 3, 7, out.path()).unwrap().unwrap();
+        assert!(
+            text.contains("\"../../meshes/tschamut2014/terrain_proxy.asc\"")
+                && !text.contains(env!("CARGO_MANIFEST_DIR")),
+            "{text}"
+        );
         let path = out.path().join("calibrated.toml");
         std::fs::write(&path, &text).unwrap();
         let sc = crate::scenario::ScenarioFile::read(&path).unwrap().resolve(&path).unwrap();

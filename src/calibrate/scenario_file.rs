@@ -51,7 +51,7 @@ pub fn rigid_body_scenario(
         t.insert("seed".into(), toml::Value::Integer(seed as i64));
     }
     let mut doc = toml::Table::new();
-    doc.insert("title".into(), toml::Value::String(format!("calibrated on {}", campaign.display())));
+    doc.insert("title".into(), toml::Value::String(format!("calibrated on {}", campaign.file_name().unwrap_or(campaign.as_os_str()).to_string_lossy())));
     doc.insert("terrain".into(), value(&terrain)?);
     doc.insert("materials".into(), toml::Value::Table(materials));
     // One campaign source (`SourceSpec`): each field run released `repeats` times from its measured state.
