@@ -538,6 +538,39 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     assert_eq!(json["model"], "2dlm");
     assert_eq!(json["holdout_ids"], serde_json::json!(["p001", "p010", "p019"]));
     assert!(out.join("report.md").is_file() && out.join("residual_map.svg").is_file());
+    // The final model as a profile scenario that `talus profile` runs: each material with the final values, the
+    // release spanning the field releases, the profile named relative to the scenario.
+    let text = std::fs::read_to_string(out.join("calibrated_profile.toml")).unwrap();
+    let sc: toml::Table = toml::from_str(&text).unwrap();
+    let params = &json["final"]["parameters"];
+    let names: Vec<&String> = sc["materials"].as_table().unwrap().keys().collect();
+    assert!(!names.is_empty(), "{text}");
+    for name in names {
+        let m = &sc["materials"][name.as_str()];
+        let mobility = params.get("mobility").and_then(|v| v.as_f64());
+        if mobility.is_none() {
+            for (key, param) in [("rn", "rn_mean"), ("rt", "rt_mean"), ("friction_angle_deg", "friction_angle_deg")] {
+                let want = params[format!("{name}.{param}")].as_f64().unwrap();
+                assert!((m[key]["mean"].as_float().unwrap() - want).abs() < 1e-9, "{name}.{key}: {text}");
+            }
+        }
+    }
+    let releases: Vec<f64> =
+        talus::campaign::Campaign::read(d).unwrap().releases.iter().map(|r| r.position_m[0]).collect();
+    let x = sc["release"]["x_m"].as_array().unwrap();
+    let lo = releases.iter().copied().fold(f64::INFINITY, f64::min);
+    assert_eq!(x[0].as_float(), Some(lo), "{text}");
+    let map = out.join("map");
+    let o = std::process::Command::new(talus)
+        .arg("profile")
+        .arg(out.join("calibrated_profile.toml"))
+        .arg("--out")
+        .arg(&map)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}\n{text}", String::from_utf8_lossy(&o.stderr));
+    assert!(map.join("endpoints.csv").is_file());
+    assert!(std::fs::read_to_string(out.join("report.md")).unwrap().contains("talus profile calibrated_profile.toml"));
     // A repeated k-fold: a summary of mean ± sd over the seeds 1 and 2, each repeat in its own folder.
     std::fs::write(d.join("settings.toml"), "max_evaluations = 20\nouter_repeats = 2\n[effects]\nmax_rounds = 0\n")
         .unwrap();

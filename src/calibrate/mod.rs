@@ -64,7 +64,7 @@ pub fn open_model(
     let (runs, groups) = runs::field_runs(&campaign, cfg.group_link_m)?;
     let model: Box<dyn Model> = match kind {
         ModelKind::Rigid3d => Box::new(model3d::Model3d::new(&campaign, runs, groups, terrain_file, cfg, source)?),
-        ModelKind::Lumped2d => Box::new(model2d::Model2d::new(runs, groups, terrain_file, cfg)?),
+        ModelKind::Lumped2d => Box::new(model2d::Model2d::new(&campaign.dir, runs, groups, terrain_file, cfg)?),
     };
     cfg.check_materials(kind, model.materials(), source)?;
     cfg.check_effects(kind, source)?;
@@ -241,7 +241,7 @@ pub fn calibrate(
     report.timing.simulations = ctx.simulations.load(std::sync::atomic::Ordering::Relaxed);
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-        let scenario = model.scenario_toml(&final_c, cfg.repeats, cfg.seed, dir)?;
+        let scenario = model.scenario_files(&final_c, cfg.repeats, cfg.seed, dir)?;
         report::write_report(
             dir,
             &report,
@@ -251,7 +251,7 @@ pub fn calibrate(
             &base_hold,
             &final_hold,
             Some(&zc),
-            scenario.as_deref(),
+            &scenario,
         )?;
     }
     Ok(Calibration { report, baseline_holdout: base_hold, final_holdout: final_hold })

@@ -141,17 +141,18 @@ pub trait Model: Sync {
     fn release_attempts(&self) -> usize;
     /// Applies a candidate.
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>>;
-    /// The model at `candidate` as a scenario file (TOML) that releases every campaign run `repeats` times with
-    /// `seed`, for `talus run`, naming its files relative to the existing folder `dir` it will be written into;
-    /// `None` for a model not read from files (synthetic ones) or without such a command.
-    fn scenario_toml(
+    /// The model at `candidate` as a scenario for `talus run` (3DRB) or `talus profile` (2DLM) with `repeats`
+    /// simulations per campaign run and `seed`: (file name, text) pairs, the scenario first, naming their files
+    /// relative to the existing folder `dir` they will be written into (see [`super::scenario_file`]); none for a
+    /// model not read from files (synthetic ones).
+    fn scenario_files(
         &self,
         _candidate: &Candidate,
         _repeats: usize,
         _seed: u64,
         _dir: &Path,
-    ) -> Result<Option<String>> {
-        Ok(None)
+    ) -> Result<Vec<(String, String)>> {
+        Ok(Vec::new())
     }
 }
 

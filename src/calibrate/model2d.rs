@@ -7,13 +7,14 @@ use super::effects::EffectKind;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
 use super::runs::FieldRun;
+use super::scenario_file;
 use crate::error::{Error, Result};
 use crate::lumped2d::{
-    simulate_rock, FlightPiece, FrictionAngle, ImpactEvent, Material2d, Options2d, PathObserver, Profile, RockStart2d,
-    Rotation, SlidePiece, Slope2d, StopReason, PFEIFFER_BOWEN_MPS,
+    simulate_rock, FlightPiece, FrictionAngle, ImpactEvent, Material2d, Options2d, PathObserver, Profile, ReleaseSpec,
+    RockStart2d, Rotation, SlidePiece, Slope2d, StopReason, ValueRange, PFEIFFER_BOWEN_MPS,
 };
 use crate::random::{stream, TruncNormal};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The 2DLM engine bound to a profile campaign.
 #[derive(Debug, Clone)]
@@ -24,19 +25,24 @@ pub struct Model2d {
     materials: Vec<String>,
     options: Options2d,
     release_attempts: usize,
+    /// The campaign folder and the profile file, for [`Model::scenario_files`] (`None` when built from parts).
+    files: Option<(PathBuf, PathBuf)>,
 }
 
 impl Model2d {
     /// Reads the profile and binds the runs to it.
     pub fn new(
+        campaign: &Path,
         runs: Vec<FieldRun>,
         group_names: Vec<String>,
         profile_file: &Path,
         cfg: &CalibrationConfig,
     ) -> Result<Model2d> {
         let profile = Profile::from_csv_path(profile_file)?;
-        Ok(Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
-            .with_release_attempts(cfg.release_attempts))
+        let mut model = Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
+            .with_release_attempts(cfg.release_attempts);
+        model.files = Some((campaign.to_path_buf(), profile_file.to_path_buf()));
+        Ok(model)
     }
 
     /// A model from a profile and options. For synthetic studies and tests.
@@ -64,7 +70,7 @@ impl Model2d {
             }
         }
         let materials = profile.material_names().to_vec();
-        Ok(Model2d { runs, group_names, profile, materials, options, release_attempts: 1 })
+        Ok(Model2d { runs, group_names, profile, materials, options, release_attempts: 1, files: None })
     }
 
     /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model2d::from_parts`]).
@@ -182,6 +188,57 @@ impl Model for Model2d {
     }
 
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>> {
+        let (profile, mats, options, _) = self.realize(candidate)?;
+        let slope = Slope2d::new(profile, mats)?;
+        Ok(Box::new(Prepared2d { model: self, slope, options }))
+    }
+
+    fn scenario_files(
+        &self,
+        candidate: &Candidate,
+        repeats: usize,
+        seed: u64,
+        dir: &Path,
+    ) -> Result<Vec<(String, String)>> {
+        let Some((campaign, profile_file)) = &self.files else {
+            return Ok(Vec::new());
+        };
+        let (profile, mats, options, zoned) = self.realize(candidate)?;
+        let span = |f: &dyn Fn(&FieldRun) -> f64| {
+            let v: Vec<f64> = self.runs.iter().map(f).collect();
+            ValueRange::new(
+                v.iter().copied().fold(f64::INFINITY, f64::min),
+                v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            )
+        };
+        let release = ReleaseSpec {
+            x_m: span(&|r| r.release_m[0]),
+            height_m: span(&|r| self.release_height_m(r)),
+            vx_mps: span(&|r| r.velocity_mps[0]),
+            vz_mps: span(&|r| r.velocity_mps[2]),
+            spin_radps: span(&|r| r.spin_radps[1]),
+        };
+        let mass_kg = self.runs.iter().map(|r| r.mass_kg).sum::<f64>() / self.runs.len() as f64;
+        scenario_file::lumped_mass_scenario(
+            dir,
+            campaign,
+            profile_file,
+            &profile,
+            zoned,
+            &mats,
+            options,
+            &release,
+            repeats * self.runs.len(),
+            mass_kg,
+            seed,
+        )
+    }
+}
+
+impl Model2d {
+    /// The profile with the candidate's zones cut in, its materials (in the profile's order) with the candidate's
+    /// values, the engine options with its effects, and whether it has zones.
+    fn realize(&self, candidate: &Candidate) -> Result<(Profile, Vec<Material2d>, Options2d, bool)> {
         let p = &candidate.params;
         let m = p.mobility();
         let mut options = self.options.clone();
@@ -224,8 +281,7 @@ impl Model for Model2d {
         for (label, _) in &zones {
             mats.push(Self::material(p, label, m)?);
         }
-        let slope = Slope2d::new(profile, mats)?;
-        Ok(Box::new(Prepared2d { model: self, slope, options }))
+        Ok((profile, mats, options, !zones.is_empty()))
     }
 }
 
@@ -347,5 +403,62 @@ impl PathObserver for PathObserver2d<'_> {
         s.impact_speed_mean_mps += vn;
         s.impact_speed_max_mps = s.impact_speed_max_mps.max(vn);
         s.impact_angle_mean_deg += vn.atan2(vt).to_degrees();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::params::EffectSpec;
+    use crate::calibrate::synthetic::{synthetic_2d, synthetic_profile, truth_2d, Synthetic2d};
+    use crate::lumped2d::ProfileScenario;
+
+    /// `calibrated_profile.toml` of a model with a zone the loop added and speed-dependent restitution: the zoned
+    /// profile is written beside it, and read back as `talus profile` reads it, every segment has the calibrated
+    /// material and the engine the calibrated options.
+    #[test]
+    fn the_calibrated_profile_scenario_holds_the_zoned_model() {
+        let spec = Synthetic2d::default();
+        let synth = synthetic_2d(&spec, Options2d::default()).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let profile_file = dir.path().join("profile.csv");
+        synthetic_profile(&spec.profile).unwrap().write_csv(&profile_file).unwrap();
+        let (runs, groups) = (synth.runs().to_vec(), synth.group_names().to_vec());
+        let model = Model2d::new(dir.path(), runs, groups, &profile_file, &CalibrationConfig::default()).unwrap();
+        let mut c = truth_2d(&spec);
+        let effect = |kind, label: &str, region| EffectSpec { kind, label: label.into(), material: None, region };
+        c.effects.push(effect(EffectKind::Zone, "zone1", Some(Region::Interval([10.0, 20.0]))));
+        c.effects.push(effect(EffectKind::SpeedRestitution, "speed", None));
+        c.params.set("speed.k_mps", 7.0);
+        for (k, v) in [("rn_mean", 0.1), ("rn_sd", 0.0), ("rt_mean", 0.5), ("rt_sd", 0.02)] {
+            c.params.set(format!("zone1.{k}"), v);
+        }
+        c.params.set("zone1.friction_angle_deg", 40.0);
+        c.params.set("zone1.roughness_sd_deg", 1.0);
+        let out = dir.path().join("out");
+        std::fs::create_dir_all(&out).unwrap();
+        let files = model.scenario_files(&c, 2, 9, &out).unwrap();
+        let names: Vec<&str> = files.iter().map(|f| f.0.as_str()).collect();
+        assert_eq!(names, [scenario_file::PROFILE_SCENARIO, scenario_file::ZONED_PROFILE]);
+        for (name, text) in &files {
+            std::fs::write(out.join(name), text).unwrap();
+        }
+        let sc = ProfileScenario::load(&out.join(scenario_file::PROFILE_SCENARIO)).unwrap();
+        assert_eq!((sc.rocks, sc.seed), (2 * model.runs().len(), 9));
+        let read = sc.resolve().unwrap();
+        let (profile, materials, options, zoned) = model.realize(&c).unwrap();
+        assert!(zoned && options.scale_rn_by_velocity && options.rn_velocity_scale_mps == 7.0);
+        assert_eq!(read.options, options);
+        let p = read.slope.profile();
+        assert_eq!((p.x_m(), p.n_segments()), (profile.x_m(), profile.n_segments()));
+        for k in 0..p.n_segments() {
+            let got = &read.slope.materials()[p.segment_materials()[k]];
+            assert_eq!(got, &materials[profile.segment_materials()[k]], "segment {k}");
+        }
+        assert!(profile.material_names().contains(&"zone1".to_string()));
+        // Every field release lies in the release ranges.
+        for r in model.runs() {
+            assert!((sc.release.x_m.min..=sc.release.x_m.max).contains(&r.release_m[0]), "{}", r.id);
+        }
     }
 }

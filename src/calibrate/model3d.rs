@@ -7,6 +7,7 @@ use super::effects::EffectKind;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
 use super::runs::FieldRun;
+use super::scenario_file;
 use crate::campaign::Campaign;
 use crate::error::{Error, Result};
 use crate::random::{stream, TruncNormal};
@@ -274,13 +275,20 @@ impl Model for Model3d {
         Ok(Box::new(Prepared3d { model: self, terrain, sim }))
     }
 
-    fn scenario_toml(&self, candidate: &Candidate, repeats: usize, seed: u64, dir: &Path) -> Result<Option<String>> {
+    fn scenario_files(
+        &self,
+        candidate: &Candidate,
+        repeats: usize,
+        seed: u64,
+        dir: &Path,
+    ) -> Result<Vec<(String, String)>> {
         let Some((campaign, spec)) = &self.files else {
-            return Ok(None);
+            return Ok(Vec::new());
         };
         let (terrain, sim, zones) = self.realize(candidate)?;
-        super::scenario_file::rigid_body_scenario(dir, campaign, spec, &terrain.materials, zones, sim, repeats, seed)
-            .map(Some)
+        let text =
+            scenario_file::rigid_body_scenario(dir, campaign, spec, &terrain.materials, zones, sim, repeats, seed)?;
+        Ok(vec![(scenario_file::RUN_SCENARIO.to_string(), text)])
     }
 }
 
@@ -493,14 +501,15 @@ mod tests {
         });
         // Written beside the campaign (under target/), so its files are named relative to it.
         let out = tempfile::tempdir_in(Path::new(env!("CARGO_MANIFEST_DIR")).join("target")).unwrap();
-        let text = model.scenario_toml(&c, 3, 7, out.path()).unwrap().unwrap();
+        let [(name, text)] = &model.scenario_files(&c, 3, 7, out.path()).unwrap()[..] else { panic!("one file") };
+        assert_eq!(name, scenario_file::RUN_SCENARIO);
         assert!(
             text.contains("\"../../meshes/tschamut2014/terrain_proxy.asc\"")
                 && !text.contains(env!("CARGO_MANIFEST_DIR")),
             "{text}"
         );
         let path = out.path().join("calibrated.toml");
-        std::fs::write(&path, &text).unwrap();
+        std::fs::write(&path, text).unwrap();
         let sc = crate::scenario::ScenarioFile::read(&path).unwrap().resolve(&path).unwrap();
         let terrain = crate::run::load_terrain(&sc).unwrap();
         let (want, sim, _) = model.realize(&c).unwrap();
@@ -521,6 +530,6 @@ mod tests {
             SimParams::default(),
             None,
         );
-        assert!(parts.unwrap().scenario_toml(&c, 3, 7, out.path()).unwrap().is_none());
+        assert!(parts.unwrap().scenario_files(&c, 3, 7, out.path()).unwrap().is_empty());
     }
 }

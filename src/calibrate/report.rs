@@ -157,8 +157,8 @@ impl From<&ZoneCheck> for ZoneSummary {
     }
 }
 
-/// Writes `report.json`, `report.md`, the charts and maps into `dir`, and the final model as a scenario
-/// (`calibrated.toml`) when there is one ([`Model::scenario_toml`]).
+/// Writes `report.json`, `report.md`, the charts and maps into `dir`, and the final model's `scenario` files
+/// ([`Model::scenario_files`]).
 #[allow(clippy::too_many_arguments)]
 pub fn write_report(
     dir: &Path,
@@ -169,7 +169,7 @@ pub fn write_report(
     base_hold: &[RunSims],
     final_hold: &[RunSims],
     zone: Option<&ZoneCheck>,
-    scenario: Option<&str>,
+    scenario: &[(String, String)],
 ) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     let json = serde_json::to_string_pretty(report)
@@ -346,10 +346,10 @@ pub fn write_report(
             ));
         }
     }
-    if let Some(text) = scenario {
-        crate::io::write_bytes_atomic(&dir.join("calibrated.toml"), text.as_bytes())?;
+    for (name, text) in scenario {
+        crate::io::write_bytes_atomic(&dir.join(name), text.as_bytes())?;
     }
-    let md = markdown(report, &figures, scenario.is_some());
+    let md = markdown(report, &figures, scenario.first().map(|f| f.0.as_str()));
     crate::io::write_bytes_atomic(&dir.join("report.md"), md.as_bytes())
 }
 
@@ -457,7 +457,7 @@ fn metrics_rows(s: &mut String, label: &str, m: &Metrics) {
 }
 
 /// The markdown report.
-pub fn markdown(r: &Report, figures: &[(String, String)], scenario: bool) -> String {
+pub fn markdown(r: &Report, figures: &[(String, String)], scenario: Option<&str>) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Calibration report ({})\n", r.model);
     let _ = writeln!(
@@ -529,8 +529,14 @@ pub fn markdown(r: &Report, figures: &[(String, String)], scenario: bool) -> Str
         let g = |p: &Params| p.get(n).map(|v| format!("{v:.4}")).unwrap_or_else(|| "–".into());
         let _ = writeln!(s, "| {n} | {} | {} |", g(&r.baseline.parameters), g(&r.final_stage.parameters));
     }
-    if scenario {
-        let _ = writeln!(s, "\nThe final model as a scenario: `calibrated.toml`. `talus run calibrated.toml --out MAP` re-runs the field releases with it; replace its `[[sources]]` to map another slope.");
+    match scenario {
+        Some(f) if f == super::scenario_file::PROFILE_SCENARIO => {
+            let _ = writeln!(s, "\nThe final model as a profile scenario: `{f}`. `talus profile {f} --out MAP` releases rocks drawn uniformly over the field releases' ranges (not run by run) on the calibrated profile; replace its `profile` and `[release]` to run another slope.");
+        }
+        Some(f) => {
+            let _ = writeln!(s, "\nThe final model as a scenario: `{f}`. `talus run {f} --out MAP` re-runs the field releases with it; replace its `[[sources]]` to map another slope.");
+        }
+        None => {}
     }
     let searches: Vec<super::fit::SearchRecord> =
         serde_json::from_value(r.population_fit["searches"].clone()).unwrap_or_default();

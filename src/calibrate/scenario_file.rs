@@ -1,8 +1,11 @@
-//! The calibrated model as a scenario file: `talus calibrate` writes `calibrated.toml`, which `talus run` reads as
-//! it is (re-running every field release) and which a user edits to map another slope with the calibrated
-//! materials and effects.
+//! The calibrated model as a scenario file: in 3DRB `talus calibrate` writes `calibrated.toml`, which `talus run`
+//! reads as it is (re-running every field release) and which a user edits to map another slope with the
+//! calibrated materials and effects; in 2DLM `calibrated_profile.toml` for `talus profile` (with
+//! `calibrated_profile.csv` when the loop added a zone).
 
 use crate::error::{Error, Result};
+use crate::lumped2d::{DistSpec, FrictionAngle, FrictionMode, Material2d, Options2d, Profile, ReleaseSpec, ValueRange};
+use crate::random::TruncNormal;
 use crate::scenario::{MaterialSpec, TerrainSpec, ZoneSpec};
 use crate::sim::SimParams;
 use crate::terrain::Material;
@@ -51,7 +54,7 @@ pub fn rigid_body_scenario(
         t.insert("seed".into(), toml::Value::Integer(seed as i64));
     }
     let mut doc = toml::Table::new();
-    doc.insert("title".into(), toml::Value::String(format!("calibrated on {}", campaign.file_name().unwrap_or(campaign.as_os_str()).to_string_lossy())));
+    doc.insert("title".into(), toml::Value::String(format!("calibrated on {}", folder_name(campaign))));
     doc.insert("terrain".into(), value(&terrain)?);
     doc.insert("materials".into(), toml::Value::Table(materials));
     // One campaign source (`SourceSpec`): each field run released `repeats` times from its measured state.
@@ -68,6 +71,114 @@ pub fn rigid_body_scenario(
          # run {repeats} times (the same model as the calibration, with its own random numbers); replace [[sources]]\n\
          # (and [terrain]) to map another slope with these materials and effects. Paths are relative to this file.\n{text}"
     ))
+}
+
+/// The 3DRB scenario file name.
+pub const RUN_SCENARIO: &str = "calibrated.toml";
+/// The 2DLM scenario file name.
+pub const PROFILE_SCENARIO: &str = "calibrated_profile.toml";
+/// The profile with the loop's zones, written beside [`PROFILE_SCENARIO`] when there are zones.
+pub const ZONED_PROFILE: &str = "calibrated_profile.csv";
+
+/// The 2DLM model as files for `talus profile`, to be written into the folder `dir`: the scenario
+/// ([`PROFILE_SCENARIO`]: every material of `profile` with its calibrated values in profile order, the engine
+/// options with the effects, `release` and `rocks` rocks of `mass_kg`) and, when `zoned` (the loop cut zones into
+/// the profile read from `profile_file`), that profile as [`ZONED_PROFILE`]. `talus profile` has one release of
+/// ranges drawn uniformly per rock, so the field runs are not re-run one by one as in 3DRB.
+///
+/// # Errors
+/// `profile_file` or `dir` cannot be found, or a value TOML cannot hold.
+#[allow(clippy::too_many_arguments)]
+pub fn lumped_mass_scenario(
+    dir: &Path,
+    campaign: &Path,
+    profile_file: &Path,
+    profile: &Profile,
+    zoned: bool,
+    materials: &[Material2d],
+    options: Options2d,
+    release: &ReleaseSpec,
+    rocks: usize,
+    mass_kg: f64,
+    seed: u64,
+) -> Result<Vec<(String, String)>> {
+    let dist = |d: &TruncNormal| DistSpec { mean: d.mean, sd: d.sd, min: Some(d.min), max: Some(d.max) };
+    let materials: toml::Table = profile
+        .material_names()
+        .iter()
+        .zip(materials)
+        .map(|(name, m)| {
+            let (friction, friction_angle_deg) = match &m.friction {
+                FrictionAngle::Given(d) => (FrictionMode::Given, Some(dist(d))),
+                FrictionAngle::FromRt => (FrictionMode::FromRt, None),
+                FrictionAngle::Zero => (FrictionMode::Zero, None),
+            };
+            let spec = crate::lumped2d::MaterialSpec {
+                preset: None,
+                rn: Some(dist(&m.rn)),
+                rt: Some(dist(&m.rt)),
+                friction_angle_deg,
+                friction: Some(friction),
+                roughness_sd_deg: Some(m.roughness_sd_deg),
+            };
+            Ok((name.clone(), value(&spec)?))
+        })
+        .collect::<Result<_>>()?;
+    let range = |r: &ValueRange| {
+        if r.min == r.max {
+            toml::Value::Float(r.min)
+        } else {
+            toml::Value::Array(vec![r.min.into(), r.max.into()])
+        }
+    };
+    let mut rel = toml::Table::new();
+    for (k, r) in [
+        ("x_m", &release.x_m),
+        ("height_m", &release.height_m),
+        ("vx_mps", &release.vx_mps),
+        ("vz_mps", &release.vz_mps),
+        ("spin_radps", &release.spin_radps),
+    ] {
+        rel.insert(k.into(), range(r));
+    }
+    let mut files = Vec::new();
+    let csv = if zoned {
+        let mut text = Vec::new();
+        profile.write_csv_to(&mut text).map_err(|e| Error::io(dir.join(ZONED_PROFILE), e))?;
+        files.push((ZONED_PROFILE.to_string(), String::from_utf8_lossy(&text).into_owned()));
+        PathBuf::from(ZONED_PROFILE)
+    } else {
+        relative_path(profile_file, dir)?
+    };
+    let mut source = toml::Table::new();
+    source.insert("csv".into(), csv.display().to_string().into());
+    let mut doc = toml::Table::new();
+    doc.insert("name".into(), format!("calibrated on {}", folder_name(campaign)).into());
+    doc.insert("rocks".into(), toml::Value::Integer(rocks as i64));
+    doc.insert("mass_kg".into(), mass_kg.into());
+    doc.insert("seed".into(), toml::Value::Integer(seed as i64));
+    doc.insert("profile".into(), toml::Value::Table(source));
+    doc.insert("materials".into(), toml::Value::Table(materials));
+    doc.insert("release".into(), toml::Value::Table(rel));
+    doc.insert("options".into(), value(&options)?);
+    let text = toml::to_string(&doc).map_err(|e| bug(e.to_string()))?;
+    files.insert(
+        0,
+        (
+            PROFILE_SCENARIO.to_string(),
+            format!(
+                "# The final 2DLM model of `talus calibrate` as a profile scenario. `talus profile THIS_FILE --out DIR`\n\
+                 # releases {rocks} rocks of {mass_kg:.1} kg (the field runs' mean mass) drawn uniformly over the ranges of the\n\
+                 # field releases (not run by run); replace `profile` and [release] to run another slope with these\n\
+                 # materials and options. Paths are relative to this file.\n{text}"
+            ),
+        ),
+    );
+    Ok(files)
+}
+
+fn folder_name(p: &Path) -> String {
+    p.file_name().unwrap_or(p.as_os_str()).to_string_lossy().into_owned()
 }
 
 /// `file` as a path relative to the folder `dir`, both as the file system resolves them (symbolic links and `..`
