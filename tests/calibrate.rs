@@ -210,6 +210,15 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
         assert!(dir.path().join(f).is_file(), "missing {f}");
     }
     assert_eq!(json["holdout_ids"].as_array().unwrap().len(), hold.len());
+    // A chart of run-out residual against every covariate, each linked from report.md's table.
+    let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    let runout = json["diagnostics"].as_array().unwrap().iter().filter(|d| d["residual"] == "runout");
+    let covariates: Vec<&str> = runout.map(|d| d["covariate"].as_str().unwrap()).collect();
+    assert!(covariates.len() > 4, "{covariates:?}");
+    for c in covariates {
+        let chart = format!("residual_vs_{c}.svg");
+        assert!(dir.path().join(&chart).is_file() && md.contains(&format!("]({chart})")), "{chart}");
+    }
 }
 
 /// Calibrates the synthetic profile case `name` ([`case_2d`]: its effect switched on but undeclared) with the

@@ -231,14 +231,14 @@ pub fn write_report(
             "Median observed and simulated run-out of each block on the held-out runs.".into(),
         ));
     }
-    // Residual against the strongest covariates.
+    // Residual against every covariate; the four strongest shown in report.md, the others linked from its table.
     if !base_cal.is_empty() {
         let cov = covariates(model, base_cal);
         let (r0, _) = residuals(model, base_cal);
         let (r1, _) = residuals(model, final_cal);
         let mut seen = Vec::new();
         for d in report.diagnostics.iter().filter(|d| d.residual == "runout") {
-            if seen.len() >= 4 || seen.contains(&d.covariate) {
+            if seen.contains(&d.covariate) {
                 continue;
             }
             let Some(x) = cov.get(&d.covariate) else { continue };
@@ -267,12 +267,14 @@ pub fn write_report(
                 hlines: vec![(0.0, String::new())],
                 ..Default::default()
             };
-            let name = format!("residual_vs_{}.svg", d.covariate);
+            let name = residual_chart(&d.covariate);
             write_svg(&dir.join(&name), &chart)?;
-            figures.push((
-                name,
-                format!("Calibration runs' run-out residuals against {}, baseline and final.", d.covariate),
-            ));
+            if seen.len() <= 4 {
+                figures.push((
+                    name,
+                    format!("Calibration runs' run-out residuals against {}, baseline and final.", d.covariate),
+                ));
+            }
         }
     }
     // Residual maps.
@@ -351,6 +353,11 @@ pub fn write_report(
     }
     let md = markdown(report, &figures, scenario.first().map(|f| f.0.as_str()));
     crate::io::write_bytes_atomic(&dir.join("report.md"), md.as_bytes())
+}
+
+/// The file of the chart of run-out residual against `covariate`.
+fn residual_chart(covariate: &str) -> String {
+    format!("residual_vs_{covariate}.svg")
 }
 
 /// `runs.csv`: one row per run with its set, group, observed run-out, the baseline's and the final model's median
@@ -638,10 +645,18 @@ pub fn markdown(r: &Report, figures: &[(String, String)], scenario: Option<&str>
             z.p_value
         );
     }
+    let charts = !r.calibration_ids.is_empty();
+    if charts {
+        let _ = writeln!(s, "Each run-out row links to its chart of residual against the covariate.\n");
+    }
     let _ = writeln!(s, "| covariate | residual | Spearman rho | p |");
     let _ = writeln!(s, "|---|---|---|---|");
-    for d in r.diagnostics.iter().take(12) {
-        let _ = writeln!(s, "| {} | {} | {:.3} | {:.3} |", d.covariate, d.residual, d.spearman_rho, d.p_value);
+    for d in &r.diagnostics {
+        let name = match charts && d.residual == "runout" {
+            true => format!("[{}]({})", d.covariate, residual_chart(&d.covariate)),
+            false => d.covariate.clone(),
+        };
+        let _ = writeln!(s, "| {name} | {} | {:.3} | {:.3} |", d.residual, d.spearman_rho, d.p_value);
     }
     let _ = writeln!(s, "\n## Figures\n");
     for (f, caption) in figures {
