@@ -86,7 +86,7 @@ impl Table {
         Error::at_line(&self.source, row.line, message, hint)
     }
 
-    /// The field of column `col` (named `name`) in `row`; empty when the row is short.
+    /// The field of column `col` in `row`; empty when there is no such column or the row is short.
     pub fn field<'r>(&self, row: &'r Row, col: Option<usize>) -> &'r str {
         col.and_then(|c| row.fields.get(c)).map_or("", String::as_str)
     }
