@@ -500,7 +500,9 @@ mod tests {
             region: Some(Region::Polygon(zone)),
         });
         // Written beside the campaign (under target/), so its files are named relative to it.
-        let out = tempfile::tempdir_in(Path::new(env!("CARGO_MANIFEST_DIR")).join("target")).unwrap();
+        let target = Path::new(env!("CARGO_MANIFEST_DIR")).join("target");
+        std::fs::create_dir_all(&target).unwrap(); // absent when CARGO_TARGET_DIR points elsewhere
+        let out = tempfile::tempdir_in(target).unwrap();
         let [(name, text)] = &model.scenario_files(&c, 3, 7, out.path()).unwrap()[..] else { panic!("one file") };
         assert_eq!(name, scenario_file::RUN_SCENARIO);
         assert!(
