@@ -178,6 +178,8 @@ pub fn write_report(
     let runs = model.runs();
     write_runs_csv(&dir.join("runs.csv"), model, base_cal, final_cal, base_hold, final_hold)?;
     let mut figures: Vec<(String, String)> = Vec::new();
+    // Covariates with a chart of run-out residual against them.
+    let mut seen: Vec<String> = Vec::new();
     // Run-out distributions before and after.
     for (name, title, base, fin) in [
         ("runout_calibration.svg", "calibration runs", base_cal, final_cal),
@@ -236,7 +238,6 @@ pub fn write_report(
         let cov = covariates(model, base_cal);
         let (r0, _) = residuals(model, base_cal);
         let (r1, _) = residuals(model, final_cal);
-        let mut seen = Vec::new();
         for d in report.diagnostics.iter().filter(|d| d.residual == "runout") {
             if seen.contains(&d.covariate) {
                 continue;
@@ -351,7 +352,7 @@ pub fn write_report(
     for (name, text) in scenario {
         crate::io::write_bytes_atomic(&dir.join(name), text.as_bytes())?;
     }
-    let md = markdown(report, &figures, scenario.first().map(|f| f.0.as_str()));
+    let md = markdown(report, &figures, &seen, scenario.first().map(|f| f.0.as_str()));
     crate::io::write_bytes_atomic(&dir.join("report.md"), md.as_bytes())
 }
 
@@ -463,8 +464,9 @@ fn metrics_rows(s: &mut String, label: &str, m: &Metrics) {
     );
 }
 
-/// The markdown report.
-pub fn markdown(r: &Report, figures: &[(String, String)], scenario: Option<&str>) -> String {
+/// The markdown report: `figures` (file, caption) shown, the covariates `charted` linked to their residual chart,
+/// and a note on the `scenario` file written, if any.
+pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], scenario: Option<&str>) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Calibration report ({})\n", r.model);
     let _ = writeln!(
@@ -645,14 +647,13 @@ pub fn markdown(r: &Report, figures: &[(String, String)], scenario: Option<&str>
             z.p_value
         );
     }
-    let charts = !r.calibration_ids.is_empty();
-    if charts {
+    if !charted.is_empty() {
         let _ = writeln!(s, "Each run-out row links to its chart of residual against the covariate.\n");
     }
     let _ = writeln!(s, "| covariate | residual | Spearman rho | p |");
     let _ = writeln!(s, "|---|---|---|---|");
     for d in &r.diagnostics {
-        let name = match charts && d.residual == "runout" {
+        let name = match d.residual == "runout" && charted.contains(&d.covariate) {
             true => format!("[{}]({})", d.covariate, residual_chart(&d.covariate)),
             false => d.covariate.clone(),
         };
