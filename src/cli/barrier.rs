@@ -5,7 +5,6 @@ use anyhow::Context;
 use clap::Args;
 use std::path::PathBuf;
 use talus::barrier::{propose, Status};
-use talus::run::RunOverrides;
 use talus::scenario::ScenarioFile;
 
 /// Propose rockfall barrier positions: candidate lines (contours, bench crests and toes, offsets of a toe or asset
@@ -24,15 +23,8 @@ pub struct BarrierArgs {
     /// Output folder (created if missing): index.html, proposals.*, candidates.*, without_barrier/, with_barrier/.
     #[arg(long)]
     out: PathBuf,
-    /// Total number of rocks per run (overrides the scenario).
-    #[arg(long)]
-    rocks: Option<usize>,
-    /// Seed of all random draws (overrides the scenario).
-    #[arg(long)]
-    seed: Option<u64>,
-    /// Threads (default: all cores). Results do not depend on it.
-    #[arg(long)]
-    threads: Option<usize>,
+    #[command(flatten)]
+    control: super::RunControl,
     /// Share of the rocks reaching the protected zone a barrier must intercept (overrides barrier_design.target_share).
     #[arg(long)]
     target_share: Option<f64>,
@@ -48,12 +40,7 @@ pub struct BarrierArgs {
 }
 
 pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
-    if a.rocks == Some(0) {
-        anyhow::bail!("--rocks: must be at least 1");
-    }
-    if a.threads == Some(0) {
-        anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)");
-    }
+    a.control.check()?;
     let mut file = ScenarioFile::read(&a.scenario)?;
     if let Some(t) = a.target_share {
         file.barrier_design.target_share = t;
@@ -66,7 +53,7 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
     let sc = file
         .resolve(&a.scenario)
         .map_err(|e| anyhow::anyhow!("{e}\n  (command-line values are checked as barrier_design.* keys)"))?;
-    let overrides = RunOverrides { rocks: a.rocks, seed: a.seed, threads: a.threads, paths: None };
+    let overrides = a.control.overrides(None);
     let pb = progress::bar(0, "rocks");
     let stage = |s: &str| {
         if pb.is_hidden() {

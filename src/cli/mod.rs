@@ -9,7 +9,39 @@ mod progress;
 mod run;
 mod section;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
+
+/// The simulating commands' overrides of the scenario (`run`, `barrier`, `profile`).
+#[derive(Debug, Args)]
+pub struct RunControl {
+    /// Number of rocks (overrides the scenario; in a 3D scenario every source's count is scaled to it).
+    #[arg(long)]
+    pub rocks: Option<usize>,
+    /// Seed of all random draws (overrides the scenario).
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Threads (default: all cores). Results do not depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+impl RunControl {
+    /// Refuses zero rocks or threads.
+    pub fn check(&self) -> anyhow::Result<()> {
+        if self.rocks == Some(0) {
+            anyhow::bail!("--rocks: must be at least 1");
+        }
+        if self.threads == Some(0) {
+            anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)");
+        }
+        Ok(())
+    }
+
+    /// The overrides of a 3D run, with the paths of the first `paths` rocks.
+    pub fn overrides(&self, paths: Option<usize>) -> talus::run::RunOverrides {
+        talus::run::RunOverrides { rocks: self.rocks, seed: self.seed, threads: self.threads, paths }
+    }
+}
 
 /// talus: open-source rockfall hazard mapping (3D rigid bodies over real terrain, 2D lumped masses on profiles).
 #[derive(Debug, Parser)]

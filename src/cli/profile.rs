@@ -20,34 +20,22 @@ pub struct ProfileArgs {
     /// Output folder (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Number of rocks (overrides the scenario).
-    #[arg(long)]
-    rocks: Option<usize>,
-    /// Seed of all random draws (overrides the scenario).
-    #[arg(long)]
-    seed: Option<u64>,
-    /// Threads (default: all cores). Results do not depend on it.
-    #[arg(long)]
-    threads: Option<usize>,
+    #[command(flatten)]
+    control: super::RunControl,
 }
 
 pub fn run(a: ProfileArgs) -> anyhow::Result<()> {
-    if a.rocks == Some(0) {
-        anyhow::bail!("--rocks: must be at least 1");
-    }
-    if a.threads == Some(0) {
-        anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)");
-    }
+    a.control.check()?;
     let mut scenario = ProfileScenario::load(&a.scenario)?;
-    if let Some(n) = a.rocks {
+    if let Some(n) = a.control.rocks {
         scenario.rocks = n;
     }
-    if let Some(s) = a.seed {
+    if let Some(s) = a.control.seed {
         scenario.seed = s;
     }
     let go = || run_profile(&scenario, &a.out).with_context(|| format!("running {}", a.scenario.display()));
     #[cfg(feature = "parallel")]
-    let summary = match a.threads {
+    let summary = match a.control.threads {
         Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n).build().context("starting the threads")?.install(go),
         None => go(),
     }?;

@@ -4,7 +4,7 @@ use super::progress;
 use anyhow::Context;
 use clap::Args;
 use std::path::PathBuf;
-use talus::run::{run_scenario, RunOverrides};
+use talus::run::run_scenario;
 use talus::scenario::ScenarioFile;
 
 /// Run a 3D rigid-body rockfall scenario and write end points, hazard rasters (GeoTIFF, PNG maps), hazard zones,
@@ -21,15 +21,8 @@ pub struct RunArgs {
     /// Output folder (created if missing).
     #[arg(long)]
     out: PathBuf,
-    /// Total number of rocks (overrides the scenario; source counts are scaled to it).
-    #[arg(long)]
-    rocks: Option<usize>,
-    /// Seed of all random draws (overrides the scenario).
-    #[arg(long)]
-    seed: Option<u64>,
-    /// Threads (default: all cores). Results do not depend on it.
-    #[arg(long)]
-    threads: Option<usize>,
+    #[command(flatten)]
+    control: super::RunControl,
     /// Also write the paths of the first N rocks (paths.csv, paths.vtk and paths.geojson).
     #[arg(long)]
     paths: Option<usize>,
@@ -39,15 +32,10 @@ pub struct RunArgs {
 }
 
 pub fn run(a: RunArgs) -> anyhow::Result<()> {
-    if a.rocks == Some(0) {
-        anyhow::bail!("--rocks: must be at least 1");
-    }
-    if a.threads == Some(0) {
-        anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)");
-    }
+    a.control.check()?;
     let mut sc = ScenarioFile::read(&a.scenario)?.resolve(&a.scenario)?;
     sc.file.output.ascii_grids |= a.ascii_grids;
-    let overrides = RunOverrides { rocks: a.rocks, seed: a.seed, threads: a.threads, paths: a.paths };
+    let overrides = a.control.overrides(a.paths);
     let pb = progress::bar(0, "rocks");
     let progress = |done: usize, total: usize| {
         if done == 1 {
