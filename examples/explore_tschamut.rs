@@ -9,7 +9,7 @@
 //! edge of the proxy's LPS data (y = 130 m) or past it. With `--terrain-of SETTINGS` the proxy is modified as the
 //! `[terrain]` section of those calibration settings says: clipped to that data
 //! (`examples/tschamut_combined_clip.toml`: a simulated rock that crosses the edge ends there) or continued level
-//! past it (`examples/tschamut_combined_level.toml`); their `release_attempts` and `materials_by` are used too (every
+//! past it (`examples/tschamut_combined_level.toml`); their `release_attempts`, `materials_by` and `[simulation]` (`cr_draw`, say) are used too (every
 //! material gets the parameters given; with `--floor CR,DYNAMIC_DEG` the material `floor` of `materials_by = "slope"`
 //! gets its own Cr and dynamic angle, its static angle the same step above it). `--roughness-m R` switches
 //! on size-relative ground roughness (`Effects::roughness_m`); `--effects "KEY = VALUE, ..."` any other effect, with
