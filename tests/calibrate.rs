@@ -542,6 +542,7 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     let out = d.join("out");
     let o = run(&["--holdout", d.join("holdout.txt").to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("the final model: talus profile "));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert_eq!(json["model"], "2dlm");

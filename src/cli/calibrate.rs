@@ -169,5 +169,10 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     };
     println!("{set} runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m, runout_w1_m {:.2} -> {:.2} m, coverage_90 {:.2} -> {:.2}", b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, b.runout_w1_m, f.runout_w1_m, b.coverage_90, f.coverage_90);
     println!("wrote {}", a.out.join("report.md").display());
+    let (file, command) = match kind {
+        ModelKind::Rigid3d => (calibrate::scenario_file::RUN_SCENARIO, "run"),
+        ModelKind::Lumped2d => (calibrate::scenario_file::PROFILE_SCENARIO, "profile"),
+    };
+    println!("the final model: talus {command} {} --out MAP", a.out.join(file).display());
     Ok(())
 }
