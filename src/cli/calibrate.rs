@@ -8,8 +8,8 @@ use talus::calibrate::{self, split, CalibrationConfig, ModelKind};
 
 /// Calibrate a model on a field campaign, measure it on held-out runs, and add the effects it lacks.
 ///
-/// Writes DIR/report.json, DIR/report.md, charts and residual maps, and in 3DRB DIR/calibrated.toml (the final model
-/// as a scenario for `talus run`). With --kfold, runs an outer k-fold
+/// Writes DIR/report.json, DIR/report.md, charts and residual maps, and the final model as a scenario: in 3DRB
+/// DIR/calibrated.toml for `talus run`, in 2DLM DIR/calibrated_profile.toml for `talus profile`. With --kfold, runs an outer k-fold
 /// cross-validation over all runs instead (DIR/fold_i/ and DIR/cv_report.json); with --kfold-repeats R > 1, R of
 /// them with seeds seed, seed+1, ... (DIR/repeat_r/ and DIR/cv_repeats.json).
 ///
