@@ -141,14 +141,12 @@ pub fn lumped_mass_scenario(
     ] {
         rel.insert(k.into(), range(r));
     }
-    let mut files = Vec::new();
-    let csv = if zoned {
+    let (csv, zoned_text) = if zoned {
         let mut text = Vec::new();
         profile.write_csv_to(&mut text).map_err(|e| Error::io(dir.join(ZONED_PROFILE), e))?;
-        files.push((ZONED_PROFILE.to_string(), String::from_utf8_lossy(&text).into_owned()));
-        PathBuf::from(ZONED_PROFILE)
+        (PathBuf::from(ZONED_PROFILE), Some(String::from_utf8_lossy(&text).into_owned()))
     } else {
-        relative_path(profile_file, dir)?
+        (relative_path(profile_file, dir)?, None)
     };
     let mut source = toml::Table::new();
     source.insert("csv".into(), csv.display().to_string().into());
@@ -162,18 +160,14 @@ pub fn lumped_mass_scenario(
     doc.insert("release".into(), toml::Value::Table(rel));
     doc.insert("options".into(), value(&options)?);
     let text = toml::to_string(&doc).map_err(|e| bug(e.to_string()))?;
-    files.insert(
-        0,
-        (
-            PROFILE_SCENARIO.to_string(),
-            format!(
-                "# The final 2DLM model of `talus calibrate` as a profile scenario. `talus profile THIS_FILE --out DIR`\n\
-                 # releases {rocks} rocks of {mass_kg:.1} kg (the field runs' mean mass) drawn uniformly over the ranges of the\n\
-                 # field releases (not run by run); replace `profile` and [release] to run another slope with these\n\
-                 # materials and options. Paths are relative to this file.\n{text}"
-            ),
-        ),
+    let scenario = format!(
+        "# The final 2DLM model of `talus calibrate` as a profile scenario. `talus profile THIS_FILE --out DIR`\n\
+         # releases {rocks} rocks of {mass_kg:.1} kg (the field runs' mean mass) drawn uniformly over the ranges of the\n\
+         # field releases (not run by run); replace `profile` and [release] to run another slope with these\n\
+         # materials and options. Paths are relative to this file.\n{text}"
     );
+    let mut files = vec![(PROFILE_SCENARIO.to_string(), scenario)];
+    files.extend(zoned_text.map(|t| (ZONED_PROFILE.to_string(), t)));
     Ok(files)
 }
 
