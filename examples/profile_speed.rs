@@ -48,7 +48,7 @@ fn main() -> Result<(), talus::Error> {
 
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_bench.toml");
     let mut scenario = ProfileScenario::load(&path)?;
-    scenario.rocks = rocks;
+    scenario.rocks = Some(rocks);
     let out = std::env::temp_dir().join(format!("talus-profile-speed-{}", std::process::id()));
     let summary = run_profile(&scenario, &out)?;
     println!(

@@ -549,7 +549,7 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     assert_eq!(json["holdout_ids"], serde_json::json!(["p001", "p010", "p019"]));
     assert!(out.join("report.md").is_file() && out.join("residual_map.svg").is_file());
     // The final model as a profile scenario that `talus profile` runs: each material with the final values, the
-    // release spanning the field releases, the profile named relative to the scenario.
+    // campaign as its release (every run `repeats` times), files named relative to the scenario.
     let text = std::fs::read_to_string(out.join("calibrated_profile.toml")).unwrap();
     let sc: toml::Table = toml::from_str(&text).unwrap();
     let params = &json["final"]["parameters"];
@@ -565,11 +565,8 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
             }
         }
     }
-    let releases: Vec<f64> =
-        talus::campaign::Campaign::read(d).unwrap().releases.iter().map(|r| r.position_m[0]).collect();
-    let x = sc["release"]["x_m"].as_array().unwrap();
-    let lo = releases.iter().copied().fold(f64::INFINITY, f64::min);
-    assert_eq!(x[0].as_float(), Some(lo), "{text}");
+    let campaign = (sc["campaign"]["dir"].as_str(), sc["campaign"]["repeats"].as_integer());
+    assert_eq!(campaign, (Some(".."), Some(20)), "{text}");
     let map = out.join("map");
     let o = std::process::Command::new(talus)
         .arg("profile")
@@ -579,7 +576,8 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
         .output()
         .unwrap();
     assert!(o.status.success(), "{}\n{text}", String::from_utf8_lossy(&o.stderr));
-    assert!(map.join("endpoints.csv").is_file());
+    let rocks = std::fs::read_to_string(map.join("endpoints.csv")).unwrap().lines().count() - 1;
+    assert_eq!(rocks, 20 * talus::campaign::Campaign::read(d).unwrap().releases.len());
     assert!(std::fs::read_to_string(out.join("report.md")).unwrap().contains("talus profile calibrated_profile.toml"));
     // A repeated k-fold: a summary of mean ± sd over the seeds 1 and 2, each repeat in its own folder.
     std::fs::write(d.join("settings.toml"), "max_evaluations = 20\nouter_repeats = 2\n[effects]\nmax_rounds = 0\n")

@@ -10,8 +10,8 @@ use super::runs::FieldRun;
 use super::scenario_file;
 use crate::error::{Error, Result};
 use crate::lumped2d::{
-    simulate_rock, FlightPiece, FrictionAngle, ImpactEvent, Material2d, Options2d, PathObserver, Profile, ReleaseSpec,
-    RockStart2d, Rotation, SlidePiece, Slope2d, StopReason, ValueRange, PFEIFFER_BOWEN_MPS,
+    simulate_rock, FlightPiece, FrictionAngle, ImpactEvent, Material2d, Options2d, PathObserver, Profile, RockStart2d,
+    Rotation, SlidePiece, Slope2d, StopReason, PFEIFFER_BOWEN_MPS,
 };
 use crate::random::{stream, TruncNormal};
 use std::path::{Path, PathBuf};
@@ -204,34 +204,7 @@ impl Model for Model2d {
             return Ok(Vec::new());
         };
         let (profile, mats, options, zoned) = self.realize(candidate)?;
-        let span = |f: &dyn Fn(&FieldRun) -> f64| {
-            let v: Vec<f64> = self.runs.iter().map(f).collect();
-            ValueRange::new(
-                v.iter().copied().fold(f64::INFINITY, f64::min),
-                v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-            )
-        };
-        let release = ReleaseSpec {
-            x_m: span(&|r| r.release_m[0]),
-            height_m: span(&|r| self.release_height_m(r)),
-            vx_mps: span(&|r| r.velocity_mps[0]),
-            vz_mps: span(&|r| r.velocity_mps[2]),
-            spin_radps: span(&|r| r.spin_radps[1]),
-        };
-        let mass_kg = self.runs.iter().map(|r| r.mass_kg).sum::<f64>() / self.runs.len() as f64;
-        scenario_file::lumped_mass_scenario(
-            dir,
-            campaign,
-            profile_file,
-            &profile,
-            zoned,
-            &mats,
-            options,
-            &release,
-            repeats * self.runs.len(),
-            mass_kg,
-            seed,
-        )
+        scenario_file::lumped_mass_scenario(dir, campaign, profile_file, &profile, zoned, &mats, options, repeats, seed)
     }
 }
 
@@ -415,7 +388,7 @@ mod tests {
 
     /// `calibrated_profile.toml` of a model with a zone the loop added and speed-dependent restitution: the zoned
     /// profile is written beside it, and read back as `talus profile` reads it, every segment has the calibrated
-    /// material and the engine the calibrated options.
+    /// material, the engine the calibrated options, and the rocks start as the field runs did, `repeats` each.
     #[test]
     fn the_calibrated_profile_scenario_holds_the_zoned_model() {
         let spec = Synthetic2d::default();
@@ -424,6 +397,21 @@ mod tests {
         let profile_file = dir.path().join("profile.csv");
         synthetic_profile(&spec.profile).unwrap().write_csv(&profile_file).unwrap();
         let (runs, groups) = (synth.runs().to_vec(), synth.group_names().to_vec());
+        // The campaign's releases and blocks, as `talus calibrate` reads them.
+        let mut release = String::from("trajectory_id,x_m,z_m,vx_mps,vz_mps,wy_radps,block_id\n");
+        let mut blocks = String::from("block_id,mass_kg,size_x_m,size_y_m,size_z_m\n");
+        let mut seen = Vec::new();
+        for r in &runs {
+            let [vx, _, vz] = r.velocity_mps;
+            let line = [r.release_m[0], r.release_m[2], vx, vz, r.spin_radps[1]].map(|v| v.to_string()).join(",");
+            release += &format!("{},{line},{}\n", r.id, r.block_id);
+            if !seen.contains(&r.block_id) {
+                seen.push(r.block_id.clone());
+                blocks += &format!("{},{},{}\n", r.block_id, r.mass_kg, r.size_m.map(|v| v.to_string()).join(","));
+            }
+        }
+        std::fs::write(dir.path().join("release_points.csv"), release).unwrap();
+        std::fs::write(dir.path().join("block_metadata.csv"), blocks).unwrap();
         let model = Model2d::new(dir.path(), runs, groups, &profile_file, &CalibrationConfig::default()).unwrap();
         let mut c = truth_2d(&spec);
         let effect = |kind, label: &str, region| EffectSpec { kind, label: label.into(), material: None, region };
@@ -444,8 +432,15 @@ mod tests {
             std::fs::write(out.join(name), text).unwrap();
         }
         let sc = ProfileScenario::load(&out.join(scenario_file::PROFILE_SCENARIO)).unwrap();
-        assert_eq!((sc.rocks, sc.seed), (2 * model.runs().len(), 9));
+        assert_eq!((sc.campaign.as_ref().map(|c| c.repeats), sc.seed), (Some(2), 9));
         let read = sc.resolve().unwrap();
+        assert_eq!(read.rocks, 2 * model.runs().len());
+        for (k, r) in model.runs().iter().enumerate() {
+            let s = &read.starts[2 * k + 1];
+            let [vx, _, vz] = r.velocity_mps;
+            let want = [r.release_m[0], r.release_m[2], vx, vz, r.spin_radps[1], r.mass_kg];
+            assert_eq!([s.x_m, s.z_m, s.vx_mps, s.vz_mps, s.spin_radps, s.mass_kg], want, "{}", r.id);
+        }
         let (profile, materials, options, zoned) = model.realize(&c).unwrap();
         assert!(zoned && options.scale_rn_by_velocity && options.rn_velocity_scale_mps == 7.0);
         assert_eq!(read.options, options);
@@ -456,9 +451,5 @@ mod tests {
             assert_eq!(got, &materials[profile.segment_materials()[k]], "segment {k}");
         }
         assert!(profile.material_names().contains(&"zone1".to_string()));
-        // Every field release lies in the release ranges.
-        for r in model.runs() {
-            assert!((sc.release.x_m.min..=sc.release.x_m.max).contains(&r.release_m[0]), "{}", r.id);
-        }
     }
 }

@@ -4,7 +4,7 @@
 //! `calibrated_profile.csv` when the loop added a zone).
 
 use crate::error::{Error, Result};
-use crate::lumped2d::{DistSpec, FrictionAngle, FrictionMode, Material2d, Options2d, Profile, ReleaseSpec, ValueRange};
+use crate::lumped2d::{DistSpec, FrictionAngle, FrictionMode, Material2d, Options2d, Profile};
 use crate::random::TruncNormal;
 use crate::scenario::{MaterialSpec, TerrainSpec, ZoneSpec};
 use crate::sim::SimParams;
@@ -82,12 +82,12 @@ pub const ZONED_PROFILE: &str = "calibrated_profile.csv";
 
 /// The 2DLM model as files for `talus profile`, to be written into the folder `dir`: the scenario
 /// ([`PROFILE_SCENARIO`]: every material of `profile` with its calibrated values in profile order, the engine
-/// options with the effects, `release` and `rocks` rocks of `mass_kg`) and, when `zoned` (the loop cut zones into
-/// the profile read from `profile_file`), that profile as [`ZONED_PROFILE`]. `talus profile` has one release of
-/// ranges drawn uniformly per rock, so the field runs are not re-run one by one as in 3DRB.
+/// options with the effects, and the `campaign` as its release, each run `repeats` times from its measured state)
+/// and, when `zoned` (the loop cut zones into the profile read from `profile_file`), that profile as
+/// [`ZONED_PROFILE`].
 ///
 /// # Errors
-/// `profile_file` or `dir` cannot be found, or a value TOML cannot hold.
+/// `campaign`, `profile_file` or `dir` cannot be found, or a value TOML cannot hold.
 #[allow(clippy::too_many_arguments)]
 pub fn lumped_mass_scenario(
     dir: &Path,
@@ -97,9 +97,7 @@ pub fn lumped_mass_scenario(
     zoned: bool,
     materials: &[Material2d],
     options: Options2d,
-    release: &ReleaseSpec,
-    rocks: usize,
-    mass_kg: f64,
+    repeats: usize,
     seed: u64,
 ) -> Result<Vec<(String, String)>> {
     let dist = |d: &TruncNormal| DistSpec { mean: d.mean, sd: d.sd, min: Some(d.min), max: Some(d.max) };
@@ -124,23 +122,9 @@ pub fn lumped_mass_scenario(
             Ok((name.clone(), value(&spec)?))
         })
         .collect::<Result<_>>()?;
-    let range = |r: &ValueRange| {
-        if r.min == r.max {
-            toml::Value::Float(r.min)
-        } else {
-            toml::Value::Array(vec![r.min.into(), r.max.into()])
-        }
-    };
-    let mut rel = toml::Table::new();
-    for (k, r) in [
-        ("x_m", &release.x_m),
-        ("height_m", &release.height_m),
-        ("vx_mps", &release.vx_mps),
-        ("vz_mps", &release.vz_mps),
-        ("spin_radps", &release.spin_radps),
-    ] {
-        rel.insert(k.into(), range(r));
-    }
+    let mut release = toml::Table::new();
+    release.insert("dir".into(), relative_path(campaign, dir)?.display().to_string().into());
+    release.insert("repeats".into(), toml::Value::Integer(repeats as i64));
     let (csv, zoned_text) = if zoned {
         let mut text = Vec::new();
         profile.write_csv_to(&mut text).map_err(|e| Error::io(dir.join(ZONED_PROFILE), e))?;
@@ -152,19 +136,17 @@ pub fn lumped_mass_scenario(
     source.insert("csv".into(), csv.display().to_string().into());
     let mut doc = toml::Table::new();
     doc.insert("name".into(), format!("calibrated on {}", folder_name(campaign)).into());
-    doc.insert("rocks".into(), toml::Value::Integer(rocks as i64));
-    doc.insert("mass_kg".into(), mass_kg.into());
     doc.insert("seed".into(), toml::Value::Integer(seed as i64));
     doc.insert("profile".into(), toml::Value::Table(source));
     doc.insert("materials".into(), toml::Value::Table(materials));
-    doc.insert("release".into(), toml::Value::Table(rel));
+    doc.insert("campaign".into(), toml::Value::Table(release));
     doc.insert("options".into(), value(&options)?);
     let text = toml::to_string(&doc).map_err(|e| bug(e.to_string()))?;
     let scenario = format!(
         "# The final 2DLM model of `talus calibrate` as a profile scenario. `talus profile THIS_FILE --out DIR`\n\
-         # releases {rocks} rocks of {mass_kg:.1} kg (the field runs' mean mass) drawn uniformly over the ranges of the\n\
-         # field releases (not run by run); replace `profile` and [release] to run another slope with these\n\
-         # materials and options. Paths are relative to this file.\n{text}"
+         # releases every field run {repeats} times from its measured state (the same model as the calibration, with\n\
+         # its own random numbers); replace `profile` and [campaign] (by [release] ranges with rocks and mass_kg)\n\
+         # to run another slope with these materials and options. Paths are relative to this file.\n{text}"
     );
     let mut files = vec![(PROFILE_SCENARIO.to_string(), scenario)];
     files.extend(zoned_text.map(|t| (ZONED_PROFILE.to_string(), t)));

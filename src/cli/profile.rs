@@ -28,7 +28,10 @@ pub fn run(a: ProfileArgs) -> anyhow::Result<()> {
     a.control.check()?;
     let mut scenario = ProfileScenario::load(&a.scenario)?;
     if let Some(n) = a.control.rocks {
-        scenario.rocks = n;
+        if scenario.campaign.is_some() {
+            anyhow::bail!("--rocks: {} releases a campaign; set its [campaign] repeats instead", a.scenario.display());
+        }
+        scenario.rocks = Some(n);
     }
     if let Some(s) = a.control.seed {
         scenario.seed = s;

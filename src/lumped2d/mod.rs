@@ -64,6 +64,6 @@ pub use run::{
     run_profile, simulate_bench, simulate_ensemble_rock, simulate_rocks, BenchCapture, BenchCaptureSummary, BenchRun,
     Percentiles, ProfileInfo, ProfileSummary, StopCounts,
 };
-pub use scenario::{ProfileScenario, ProfileSource, ReleaseSpec, ResolvedScenario};
+pub use scenario::{CampaignRelease, ProfileScenario, ProfileSource, ReleaseSpec, ResolvedScenario};
 pub use section::{section_from_mesh, SectionMaterials};
 pub use slope::Slope2d;

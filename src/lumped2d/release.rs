@@ -121,6 +121,23 @@ impl Release2d {
         }
     }
 
+    /// The ranges that `starts` span (height above `profile`) and their mean mass: a description of a set of
+    /// given starts, as `summary.json` reports them. `starts` must not be empty and must lie over `profile`.
+    pub fn spanning(starts: &[RockStart2d], profile: &Profile) -> Release2d {
+        let span = |f: &dyn Fn(&RockStart2d) -> f64| {
+            let v = starts.iter().map(f);
+            ValueRange::new(v.clone().fold(f64::INFINITY, f64::min), v.fold(f64::NEG_INFINITY, f64::max))
+        };
+        Release2d {
+            x_m: span(&|s| s.x_m),
+            height_m: span(&|s| s.z_m - profile.z_at(s.x_m).unwrap_or(s.z_m)),
+            vx_mps: span(&|s| s.vx_mps),
+            vz_mps: span(&|s| s.vz_mps),
+            spin_radps: span(&|s| s.spin_radps),
+            mass_kg: starts.iter().map(|s| s.mass_kg).sum::<f64>() / starts.len() as f64,
+        }
+    }
+
     /// The same release with the horizontal velocity drawn from `[min, max]` m/s.
     #[must_use]
     pub fn with_vx_mps(mut self, min: f64, max: f64) -> Release2d {

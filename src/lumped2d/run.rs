@@ -243,8 +243,10 @@ pub struct ProfileSummary {
     pub bench: Option<BenchGeometry>,
     /// Materials as resolved.
     pub materials: BTreeMap<String, Material2d>,
-    /// The release.
+    /// The release (for a campaign: the ranges its runs span and their mean mass).
     pub release: Release2d,
+    /// The campaign whose runs were released, if any.
+    pub campaign: Option<super::scenario::CampaignRelease>,
     /// Engine options.
     pub options: Options2d,
     /// Rock radius (sphere at the rock density), m.
@@ -308,7 +310,7 @@ pub fn run_profile(scenario: &ProfileScenario, out_dir: &Path) -> Result<Profile
     let mut stops = StopCounts::default();
     let mut runout = LogHistogram::default();
     let mut capture = rs.bench.as_ref().map(|g| vec![0usize; g.n_benches + 1]);
-    let n = scenario.rocks;
+    let n = rs.rocks;
     let mass = rs.release.mass_kg;
 
     let path = out_dir.join("endpoints.csv");
@@ -319,7 +321,16 @@ pub fn run_profile(scenario: &ProfileScenario, out_dir: &Path) -> Result<Profile
         for b0 in (0..n).step_by(BATCH) {
             let batch = map_indexed(b0..(b0 + BATCH).min(n), |i| {
                 let mut rec = GaugeRecorder::new(&layout, profile);
-                let r = simulate_ensemble_rock(&rs.slope, &rs.release, &rs.options, scenario.seed, i as u64, &mut rec);
+                let r = match rs.starts.get(i) {
+                    Some(start) => {
+                        let mut rng = stream(scenario.seed, i as u64);
+                        let r = simulate_rock(&rs.slope, start, &rs.options, &mut rng, &mut rec);
+                        RockResult2d { rock_id: i as u64, ..r }
+                    }
+                    None => {
+                        simulate_ensemble_rock(&rs.slope, &rs.release, &rs.options, scenario.seed, i as u64, &mut rec)
+                    }
+                };
                 (r, rec.crossings)
             });
             for (r, mut crossings) in batch {
@@ -337,7 +348,7 @@ pub fn run_profile(scenario: &ProfileScenario, out_dir: &Path) -> Result<Profile
                     r.impacts
                 )
                 .map_err(&e)?;
-                gauges.add_rock(&mut crossings, mass);
+                gauges.add_rock(&mut crossings, rs.starts.get(r.rock_id as usize).map_or(mass, |s| s.mass_kg));
                 stops.add(r.stop_reason);
                 runout.add(r.runout_m);
                 if let (Some(c), Some(g)) = (capture.as_mut(), rs.bench.as_ref()) {
@@ -424,6 +435,7 @@ pub fn run_profile(scenario: &ProfileScenario, out_dir: &Path) -> Result<Profile
         bench: rs.bench.clone(),
         materials: rs.materials.clone(),
         release: rs.release,
+        campaign: scenario.campaign.clone(),
         options: rs.options.clone(),
         rock_radius_m: rs.options.radius_m(mass),
         rocks: n,

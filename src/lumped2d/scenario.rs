@@ -39,6 +39,13 @@
 //! vz_mps = 0.0          # default 0
 //! spin_radps = 0.0      # default 0; only used with a rotational rule
 //!
+//! # ... or, instead of [release], rocks and mass_kg: every run of a field campaign (`talus calibrate`'s format
+//! # along the profile: release_points.csv with x_m, z_m, vx_mps, vz_mps, wy_radps, block_id, and
+//! # block_metadata.csv), each `repeats` times from its measured state with its block's mass.
+//! # [campaign]
+//! # dir = "my_campaign"   # relative to this file
+//! # repeats = 20          # default 20
+//!
 //! # Engine options (see `Options2d`; all optional).
 //! [options]
 //! scale_rn_by_velocity = false
@@ -54,11 +61,13 @@
 //! max_time_s = 600.0
 //! ```
 
+use super::engine::RockStart2d;
 use super::material::{Material2d, MaterialSpec};
 use super::options::Options2d;
 use super::profile::Profile;
 use super::release::{Release2d, ValueRange};
 use super::slope::Slope2d;
+use crate::campaign::Campaign;
 use crate::error::{Error, Result};
 use crate::terrain::BenchGeometry;
 use serde::{Deserialize, Serialize};
@@ -99,6 +108,22 @@ fn default_spacing() -> f64 {
     1.0
 }
 
+fn default_repeats() -> usize {
+    20
+}
+
+/// The `[campaign]` table: release every run of a field campaign `repeats` times from its measured state.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CampaignRelease {
+    /// The campaign folder (`talus calibrate`'s format, along the profile: `y_m` absent or 0), relative to the
+    /// scenario file.
+    pub dir: PathBuf,
+    /// Rocks per field run (default: 20).
+    #[serde(default = "default_repeats")]
+    pub repeats: usize,
+}
+
 /// A profile scenario as written in TOML (see the module docs for the format).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -110,12 +135,18 @@ pub struct ProfileScenario {
     pub profile: ProfileSource,
     /// One material per profile material name.
     pub materials: BTreeMap<String, MaterialSpec>,
-    /// The release.
-    pub release: ReleaseSpec,
-    /// Number of rocks.
-    pub rocks: usize,
-    /// Rock mass, kg.
-    pub mass_kg: f64,
+    /// The release of ranges (give it or `campaign`).
+    #[serde(default)]
+    pub release: Option<ReleaseSpec>,
+    /// The release of a field campaign's runs (give it or `release`).
+    #[serde(default)]
+    pub campaign: Option<CampaignRelease>,
+    /// Number of rocks (with `release`).
+    #[serde(default)]
+    pub rocks: Option<usize>,
+    /// Rock mass, kg (with `release`; a campaign's rocks have their blocks' masses).
+    #[serde(default)]
+    pub mass_kg: Option<f64>,
     /// Random seed (default: 0).
     #[serde(default)]
     pub seed: u64,
@@ -143,8 +174,13 @@ pub struct ResolvedScenario {
     pub slope: Slope2d,
     /// The materials by name, as resolved.
     pub materials: BTreeMap<String, Material2d>,
-    /// The release, with the scenario's mass.
+    /// The release of ranges, with the scenario's mass; for a campaign, the ranges its starts span and their mean
+    /// mass (a description: the rocks start from `starts`).
     pub release: Release2d,
+    /// A campaign's rock starts, one per rock (each run `repeats` times in a row); empty for a release of ranges.
+    pub starts: Vec<RockStart2d>,
+    /// Number of rocks.
+    pub rocks: usize,
     /// Engine options.
     pub options: Options2d,
     /// The bench geometry, when the profile is a benched slope.
@@ -206,26 +242,37 @@ impl ProfileScenario {
             materials.insert(name.clone(), spec.resolve(&format!("materials.{name}"))?);
         }
         let slope = Slope2d::with_named_materials(profile, &materials)?;
-        let release = Release2d {
-            x_m: self.release.x_m,
-            height_m: self.release.height_m,
-            vx_mps: self.release.vx_mps,
-            vz_mps: self.release.vz_mps,
-            spin_radps: self.release.spin_radps,
-            mass_kg: self.mass_kg,
+        let (release, starts) = match (&self.release, &self.campaign) {
+            (Some(spec), None) => (self.ranges(spec, slope.profile())?, Vec::new()),
+            (None, Some(c)) => {
+                for (key, given) in [("rocks", self.rocks.is_some()), ("mass_kg", self.mass_kg.is_some())] {
+                    if given {
+                        return Err(Error::invalid(
+                            key,
+                            "is given beside [campaign]",
+                            "leave it out: a campaign releases its runs `repeats` times each, with their blocks' masses",
+                        ));
+                    }
+                }
+                let dir = match &self.base_dir {
+                    Some(d) if c.dir.is_relative() => d.join(&c.dir),
+                    _ => c.dir.clone(),
+                };
+                let starts = campaign_starts(&dir, c.repeats, slope.profile())?;
+                (Release2d::spanning(&starts, slope.profile()), starts)
+            }
+            (Some(_), Some(_)) => {
+                return Err(Error::invalid("release", "is given beside [campaign]", "give one of them"));
+            }
+            (None, None) => {
+                return Err(Error::invalid(
+                    "release",
+                    "is missing",
+                    "give [release] ranges with rocks and mass_kg, or a [campaign] folder",
+                ));
+            }
         };
-        if !(self.mass_kg.is_finite() && self.mass_kg > 0.0) {
-            return Err(Error::invalid(
-                "mass_kg",
-                format!("must be a positive number of kilograms, got {}", self.mass_kg),
-                "give the rock mass in kg, e.g. mass_kg = 1000",
-            ));
-        }
-        release.validate(slope.profile(), "release.")?;
         self.options.validate("options.")?;
-        if self.rocks == 0 {
-            return Err(Error::invalid("rocks", "must be at least 1", "e.g. rocks = 300"));
-        }
         let (x0, x1) = slope.profile().x_range_m();
         if !(self.envelope_spacing_m.is_finite() && self.envelope_spacing_m > 0.0) {
             return Err(Error::invalid(
@@ -250,8 +297,86 @@ impl ProfileScenario {
                 ));
             }
         }
-        Ok(ResolvedScenario { slope, materials, release, options: self.options.clone(), bench, profile_source })
+        let rocks = if starts.is_empty() { self.rocks.unwrap_or(0) } else { starts.len() };
+        Ok(ResolvedScenario {
+            slope,
+            materials,
+            release,
+            starts,
+            rocks,
+            options: self.options.clone(),
+            bench,
+            profile_source,
+        })
     }
+
+    /// The release of ranges, checked against `profile`, with `rocks` and `mass_kg`.
+    fn ranges(&self, spec: &ReleaseSpec, profile: &Profile) -> Result<Release2d> {
+        let mass_kg = self
+            .mass_kg
+            .ok_or_else(|| Error::invalid("mass_kg", "is missing", "give the rock mass in kg, e.g. mass_kg = 1000"))?;
+        if !(mass_kg.is_finite() && mass_kg > 0.0) {
+            return Err(Error::invalid(
+                "mass_kg",
+                format!("must be a positive number of kilograms, got {mass_kg}"),
+                "give the rock mass in kg, e.g. mass_kg = 1000",
+            ));
+        }
+        if self.rocks.unwrap_or(0) == 0 {
+            return Err(Error::invalid("rocks", "must be at least 1", "e.g. rocks = 300"));
+        }
+        let release = Release2d {
+            x_m: spec.x_m,
+            height_m: spec.height_m,
+            vx_mps: spec.vx_mps,
+            vz_mps: spec.vz_mps,
+            spin_radps: spec.spin_radps,
+            mass_kg,
+        };
+        release.validate(profile, "release.")?;
+        Ok(release)
+    }
+}
+
+/// The starts of every run of the campaign in `dir`, in file order, each `repeats` times: its measured position
+/// (x, z), velocity (vx, vz) and spin (`wy_radps`), and its block's mass.
+///
+/// # Errors
+/// The campaign's own errors; `repeats` 0; a run off the profile's plane (y ≠ 0), outside its x range or below it.
+fn campaign_starts(dir: &Path, repeats: usize, profile: &Profile) -> Result<Vec<RockStart2d>> {
+    if repeats == 0 {
+        return Err(Error::invalid("campaign.repeats", "must be at least 1", "e.g. repeats = 20"));
+    }
+    let campaign = Campaign::read(dir)?;
+    let (x0, x1) = profile.x_range_m();
+    let mut starts = Vec::new();
+    for r in &campaign.releases {
+        let [x, y, z] = r.position_m;
+        let ground = profile.z_at(x).filter(|_| (x0..=x1).contains(&x));
+        let problem = match ground {
+            _ if y != 0.0 => Some(format!("has y = {y}: a profile campaign lies in the profile's plane")),
+            None => Some(format!("starts at x = {x}, outside the profile [{x0}, {x1}]")),
+            Some(g) if z < g - 1e-6 => Some(format!("starts at z = {z}, below the profile ({g} there)")),
+            _ => None,
+        };
+        if let Some(message) = problem {
+            return Err(Error::invalid(
+                format!("{}: run {}", dir.join("release_points.csv").display(), r.trajectory_id),
+                message,
+                "check that the campaign and the profile share a frame",
+            ));
+        }
+        let start = RockStart2d {
+            x_m: x,
+            z_m: z,
+            vx_mps: r.velocity_mps[0],
+            vz_mps: r.velocity_mps[2],
+            spin_radps: r.spin_radps[1],
+            mass_kg: campaign.blocks[&r.block_id].mass_kg,
+        };
+        starts.extend(std::iter::repeat_n(start, repeats));
+    }
+    Ok(starts)
 }
 
 #[cfg(test)]
@@ -282,5 +407,48 @@ mod tests {
         let bad = EXAMPLE.replace("switch_speed_mps = 0.5", "switch_speed_mps = 0.5\nswitch_speed = 1");
         let e = ProfileScenario::from_toml_str(&bad, "s.toml").unwrap_err().to_string();
         assert!(e.contains("switch_speed"), "{e}");
+    }
+
+    /// A `[campaign]` release starts every run `repeats` times from its measured state with its block's mass;
+    /// it excludes `[release]`, `rocks` and `mass_kg`, and a run off the profile is named.
+    #[test]
+    fn a_campaign_release_starts_each_run_as_measured() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        let write = |release: &str| {
+            std::fs::write(d.join("release_points.csv"), release).unwrap();
+            std::fs::write(d.join("block_metadata.csv"), "block_id,mass_kg,size_x_m,size_y_m,size_z_m\nb,500,1,1,1\n")
+                .unwrap();
+        };
+        write("trajectory_id,x_m,z_m,vx_mps,block_id\nr1,10.2,200,1.5,b\nr2,10.4,200,2.0,b\n");
+        let i = EXAMPLE.find("[release]").unwrap();
+        let j = EXAMPLE[i..].find("\n[").map_or(EXAMPLE.len(), |k| i + k + 1);
+        let without = format!("{}{}", &EXAMPLE[..i], &EXAMPLE[j..]);
+        let without =
+            without.lines().filter(|l| !l.starts_with("rocks") && !l.starts_with("mass_kg")).collect::<Vec<_>>();
+        let base = without.join("\n");
+        // `top`: keys before the first table; `table`: tables after the others.
+        let scenario = |top: &str, table: &str| {
+            let mut s = ProfileScenario::from_toml_str(&format!("{top}\n{base}\n{table}"), "s.toml").unwrap();
+            s.base_dir = Some(d.to_path_buf());
+            s.resolve()
+        };
+        let r = scenario("", "[campaign]\ndir = \".\"\nrepeats = 3\n").unwrap();
+        assert_eq!((r.rocks, r.starts.len()), (6, 6));
+        let (a, b) = (r.starts[2], r.starts[3]);
+        assert_eq!([a.x_m, a.z_m, a.vx_mps, a.mass_kg, b.x_m, b.vx_mps], [10.2, 200.0, 1.5, 500.0, 10.4, 2.0]);
+        let e = scenario("rocks = 5", "[campaign]\ndir = \".\"\n").unwrap_err().to_string();
+        assert!(e.contains("rocks") && e.contains("[campaign]"), "{e}");
+        let e = scenario("", "").unwrap_err().to_string();
+        assert!(e.contains("release") && e.contains("missing"), "{e}");
+        let e = ProfileScenario::from_toml_str(&format!("{EXAMPLE}\n[campaign]\ndir = \".\"\n"), "s.toml")
+            .unwrap()
+            .resolve()
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("release") && e.contains("beside"), "{e}");
+        write("trajectory_id,x_m,y_m,z_m,block_id\nr1,10.2,3,200,b\n");
+        let e = scenario("", "[campaign]\ndir = \".\"\n").unwrap_err().to_string();
+        assert!(e.contains("run r1") && e.contains("y = 3"), "{e}");
     }
 }
