@@ -249,7 +249,7 @@ pub struct ProfileSummary {
     pub campaign: Option<super::scenario::CampaignRelease>,
     /// Engine options.
     pub options: Options2d,
-    /// Rock radius (sphere at the rock density), m.
+    /// Rock radius (sphere at the rock density; for a campaign, of its mean mass), m.
     pub rock_radius_m: f64,
     /// Number of rocks.
     pub rocks: usize,
