@@ -41,6 +41,30 @@ fn shipped_calibration_settings_files_read() {
     }
 }
 
+/// `examples/profile_campaign/` is what `write_profile_campaign` writes for the `2d_zone` case, seed 1.
+#[test]
+fn the_shipped_profile_campaign_is_what_its_command_writes() {
+    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign");
+    let dir = tempfile::tempdir().unwrap();
+    let spec = talus::calibrate::synthetic::case_2d("zone", 1).unwrap();
+    talus::calibrate::synthetic::write_profile_campaign(&spec, dir.path()).unwrap();
+    // Numbers to 1e-6 (relative), so that another libm's last bit does not fail it.
+    let same = |a: &str, b: &str| match (a.parse::<f64>(), b.parse::<f64>()) {
+        (Ok(x), Ok(y)) => (x - y).abs() <= 1e-6 * x.abs().max(1.0),
+        _ => a == b,
+    };
+    for f in ["release_points.csv", "observed_deposition.csv", "block_metadata.csv", "profile.csv"] {
+        let (want, got) =
+            (std::fs::read_to_string(shipped.join(f)).unwrap(), std::fs::read_to_string(dir.path().join(f)).unwrap());
+        assert_eq!(want.lines().count(), got.lines().count(), "{f}");
+        for (l, (w, g)) in want.lines().zip(got.lines()).enumerate() {
+            let fields = |t: &str| t.split(',').map(str::to_string).collect::<Vec<_>>();
+            let (w, g) = (fields(w), fields(g));
+            assert!(w.len() == g.len() && w.iter().zip(&g).all(|(a, b)| same(a, b)), "{f}:{}: {w:?} vs {g:?}", l + 1);
+        }
+    }
+}
+
 /// The shipped calibrated Tschamut scenario reads as `talus run` reads it, with the campaign as its source.
 #[test]
 fn the_shipped_calibrated_tschamut_scenario_reads() {
@@ -490,30 +514,8 @@ fn observed_runs(dir: &std::path::Path) -> usize {
 }
 
 fn write_profile_campaign(dir: &std::path::Path) {
-    let model =
-        synthetic_2d(&Synthetic2d { seed: 5, runs_per_group: 3, ..Default::default() }, Options2d::default()).unwrap();
-    let mut rel = String::from("trajectory_id,x_m,z_m,vx_mps,vz_mps,block_id\n");
-    let mut dep = String::from("trajectory_id,x_m,z_m\n");
-    let mut blocks = std::collections::BTreeMap::new();
-    for r in model.runs() {
-        rel += &format!(
-            "{},{},{},{},{},{}\n",
-            r.id, r.release_m[0], r.release_m[2], r.velocity_mps[0], r.velocity_mps[2], r.block_id
-        );
-        dep += &format!("{},{},{}\n", r.id, r.rest_m[0], r.rest_m[2]);
-        blocks.insert(r.block_id.clone(), (r.mass_kg, r.size_m));
-    }
-    let mut blk = String::from("block_id,mass_kg,size_x_m,size_y_m,size_z_m\n");
-    for (b, (m, s)) in blocks {
-        blk += &format!("{b},{m},{},{},{}\n", s[0], s[1], s[2]);
-    }
-    std::fs::write(dir.join("release_points.csv"), rel).unwrap();
-    std::fs::write(dir.join("observed_deposition.csv"), dep).unwrap();
-    std::fs::write(dir.join("block_metadata.csv"), blk).unwrap();
-    talus::calibrate::synthetic::synthetic_profile(&Synthetic2d::default().profile)
-        .unwrap()
-        .write_csv(&dir.join("profile.csv"))
-        .unwrap();
+    let spec = Synthetic2d { seed: 5, runs_per_group: 3, ..Default::default() };
+    talus::calibrate::synthetic::write_profile_campaign(&spec, dir).unwrap();
 }
 
 #[test]

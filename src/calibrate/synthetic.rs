@@ -13,7 +13,7 @@ use super::model2d::Model2d;
 use super::model3d::Model3d;
 use super::params::{Candidate, EffectSpec, Params, Region};
 use super::runs::{assign_groups, FieldRun};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::lumped2d::{Options2d, Profile};
 use crate::random::{standard_normal, stream, uniform, TruncNormal};
 use crate::rock::{RockBody, RockSize, ShapeKind};
@@ -21,6 +21,7 @@ use crate::sim::SimParams;
 use crate::terrain::{Material, Terrain};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
+use std::path::Path;
 
 /// The effect hidden in a synthetic campaign.
 #[derive(Debug, Clone, PartialEq)]
@@ -508,6 +509,37 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
     let truth_model = Model2d::from_parts(runs.clone(), groups.clone(), profile.clone(), options.clone())?;
     observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m)?;
     Model2d::from_parts(runs, groups, profile, options)
+}
+
+/// Writes the synthetic 2DLM campaign of `spec` into the folder `dir` as a user's field campaign would be: the
+/// campaign CSVs (`release_points.csv`, `observed_deposition.csv`, `block_metadata.csv`) and the profile as
+/// `profile.csv`, ready for `talus calibrate DIR --terrain DIR/profile.csv --model 2dlm`.
+///
+/// # Errors
+/// The campaign cannot be simulated, or a file cannot be written.
+pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path) -> Result<()> {
+    let model = synthetic_2d(spec, Options2d::default())?;
+    let mut release = String::from("trajectory_id,x_m,z_m,vx_mps,vz_mps,wy_radps,block_id\n");
+    let mut rest = String::from("trajectory_id,x_m,z_m,block_id\n");
+    let mut blocks = BTreeMap::new();
+    for r in model.runs() {
+        let [vx, _, vz] = r.velocity_mps;
+        let state = [r.release_m[0], r.release_m[2], vx, vz, r.spin_radps[1]].map(|v| v.to_string()).join(",");
+        release += &format!("{},{state},{}\n", r.id, r.block_id);
+        rest += &format!("{},{},{},{}\n", r.id, r.rest_m[0], r.rest_m[2], r.block_id);
+        blocks.insert(r.block_id.clone(), (r.mass_kg, r.size_m));
+    }
+    let mut block_csv = String::from("block_id,mass_kg,size_x_m,size_y_m,size_z_m\n");
+    for (id, (mass_kg, size_m)) in blocks {
+        block_csv += &format!("{id},{mass_kg},{}\n", size_m.map(|v| v.to_string()).join(","));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    for (name, text) in
+        [("release_points.csv", release), ("observed_deposition.csv", rest), ("block_metadata.csv", block_csv)]
+    {
+        crate::io::write_bytes_atomic(&dir.join(name), text.as_bytes())?;
+    }
+    synthetic_profile(&spec.profile)?.write_csv(&dir.join("profile.csv"))
 }
 
 /// Share of `polygon`'s area that lies inside `truth` (estimated on a 40 × 40 lattice over the polygon's bounding
