@@ -322,8 +322,10 @@ impl ProfileScenario {
                 "give the rock mass in kg, e.g. mass_kg = 1000",
             ));
         }
-        if self.rocks.unwrap_or(0) == 0 {
-            return Err(Error::invalid("rocks", "must be at least 1", "e.g. rocks = 300"));
+        match self.rocks {
+            None => return Err(Error::invalid("rocks", "is missing", "give the number of rocks, e.g. rocks = 300")),
+            Some(0) => return Err(Error::invalid("rocks", "must be at least 1", "e.g. rocks = 300")),
+            Some(_) => {}
         }
         let release = Release2d {
             x_m: spec.x_m,
@@ -401,6 +403,11 @@ mod tests {
         let bad = EXAMPLE.replace("x_m = [10.0, 10.5]", "x_m = [10.0, 1000.5]");
         let e = ProfileScenario::from_toml_str(&bad, "s.toml").unwrap().resolve().unwrap_err().to_string();
         assert!(e.contains("release.x_m"), "{e}");
+        for key in ["rocks = 300\n", "mass_kg = 1000.0\n"] {
+            let bad = EXAMPLE.replace(key, "");
+            let e = ProfileScenario::from_toml_str(&bad, "s.toml").unwrap().resolve().unwrap_err().to_string();
+            assert!(e.contains(key.split(' ').next().unwrap()) && e.contains("missing"), "{e}");
+        }
         let bad = EXAMPLE.replace("[materials.floor]", "[materials.flor]");
         let e = ProfileScenario::from_toml_str(&bad, "s.toml").unwrap().resolve().unwrap_err().to_string();
         assert!(e.contains("materials.floor") && e.contains("flor"), "{e}");
