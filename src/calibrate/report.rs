@@ -540,7 +540,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
     }
     match scenario {
         Some(f) if f == super::scenario_file::PROFILE_SCENARIO => {
-            let _ = writeln!(s, "\nThe final model as a profile scenario: `{f}`. `talus profile {f} --out MAP` releases rocks drawn uniformly over the field releases' ranges (not run by run) on the calibrated profile; replace its `profile` and `[release]` to run another slope.");
+            let _ = writeln!(s, "\nThe final model as a profile scenario: `{f}`. `talus profile {f} --out MAP` re-runs the field releases with it on the calibrated profile; replace its `profile` and `[campaign]` to run another slope.");
         }
         Some(f) => {
             let _ = writeln!(s, "\nThe final model as a scenario: `{f}`. `talus run {f} --out MAP` re-runs the field releases with it; replace its `[[sources]]` to map another slope.");
