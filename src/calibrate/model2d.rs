@@ -383,7 +383,7 @@ impl PathObserver for PathObserver2d<'_> {
 mod tests {
     use super::*;
     use crate::calibrate::params::EffectSpec;
-    use crate::calibrate::synthetic::{synthetic_2d, synthetic_profile, truth_2d, Synthetic2d};
+    use crate::calibrate::synthetic::{synthetic_2d, truth_2d, write_profile_campaign, Synthetic2d};
     use crate::lumped2d::ProfileScenario;
 
     /// `calibrated_profile.toml` of a model with a zone the loop added and speed-dependent restitution: the zoned
@@ -393,25 +393,11 @@ mod tests {
     fn the_calibrated_profile_scenario_holds_the_zoned_model() {
         let spec = Synthetic2d::default();
         let synth = synthetic_2d(&spec, Options2d::default()).unwrap();
+        // The same campaign as files, as `talus calibrate` reads them.
         let dir = tempfile::tempdir().unwrap();
+        write_profile_campaign(&spec, dir.path()).unwrap();
         let profile_file = dir.path().join("profile.csv");
-        synthetic_profile(&spec.profile).unwrap().write_csv(&profile_file).unwrap();
         let (runs, groups) = (synth.runs().to_vec(), synth.group_names().to_vec());
-        // The campaign's releases and blocks, as `talus calibrate` reads them.
-        let mut release = String::from("trajectory_id,x_m,z_m,vx_mps,vz_mps,wy_radps,block_id\n");
-        let mut blocks = String::from("block_id,mass_kg,size_x_m,size_y_m,size_z_m\n");
-        let mut seen = Vec::new();
-        for r in &runs {
-            let [vx, _, vz] = r.velocity_mps;
-            let line = [r.release_m[0], r.release_m[2], vx, vz, r.spin_radps[1]].map(|v| v.to_string()).join(",");
-            release += &format!("{},{line},{}\n", r.id, r.block_id);
-            if !seen.contains(&r.block_id) {
-                seen.push(r.block_id.clone());
-                blocks += &format!("{},{},{}\n", r.block_id, r.mass_kg, r.size_m.map(|v| v.to_string()).join(","));
-            }
-        }
-        std::fs::write(dir.path().join("release_points.csv"), release).unwrap();
-        std::fs::write(dir.path().join("block_metadata.csv"), blocks).unwrap();
         let model = Model2d::new(dir.path(), runs, groups, &profile_file, &CalibrationConfig::default()).unwrap();
         let mut c = truth_2d(&spec);
         let effect = |kind, label: &str, region| EffectSpec { kind, label: label.into(), material: None, region };

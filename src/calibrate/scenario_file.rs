@@ -4,7 +4,9 @@
 //! `calibrated_profile.csv` when the loop added a zone).
 
 use crate::error::{Error, Result};
-use crate::lumped2d::{DistSpec, FrictionAngle, FrictionMode, Material2d, Options2d, Profile};
+use crate::lumped2d::{
+    CampaignRelease, DistSpec, FrictionAngle, FrictionMode, Material2d, Options2d, Profile, ProfileSource,
+};
 use crate::random::TruncNormal;
 use crate::scenario::{MaterialSpec, TerrainSpec, ZoneSpec};
 use crate::sim::SimParams;
@@ -122,9 +124,7 @@ pub fn lumped_mass_scenario(
             Ok((name.clone(), value(&spec)?))
         })
         .collect::<Result<_>>()?;
-    let mut release = toml::Table::new();
-    release.insert("dir".into(), relative_path(campaign, dir)?.display().to_string().into());
-    release.insert("repeats".into(), toml::Value::Integer(repeats as i64));
+    let release = CampaignRelease { dir: relative_path(campaign, dir)?, repeats };
     let (csv, zoned_text) = if zoned {
         let mut text = Vec::new();
         profile.write_csv_to(&mut text).map_err(|e| Error::io(dir.join(ZONED_PROFILE), e))?;
@@ -132,14 +132,12 @@ pub fn lumped_mass_scenario(
     } else {
         (relative_path(profile_file, dir)?, None)
     };
-    let mut source = toml::Table::new();
-    source.insert("csv".into(), csv.display().to_string().into());
     let mut doc = toml::Table::new();
     doc.insert("name".into(), format!("calibrated on {}", folder_name(campaign)).into());
     doc.insert("seed".into(), toml::Value::Integer(seed as i64));
-    doc.insert("profile".into(), toml::Value::Table(source));
+    doc.insert("profile".into(), value(&ProfileSource::Csv(csv))?);
     doc.insert("materials".into(), toml::Value::Table(materials));
-    doc.insert("campaign".into(), toml::Value::Table(release));
+    doc.insert("campaign".into(), value(&release)?);
     doc.insert("options".into(), value(&options)?);
     let text = toml::to_string(&doc).map_err(|e| bug(e.to_string()))?;
     let scenario = format!(
