@@ -3,9 +3,9 @@
 //! calibrated with the effect undeclared. Writes `outputs/calibration_study/summary.json` (and one line per case
 //! on stdout; a case run again replaces its row, the others keep theirs), and a full report per case.
 //!
-//! Run: cargo run --release --example calibration_study [-- CASE ...]   (cases: speed size zone rough control_a_N
-//! control_b_N 2d_speed 2d_size 2d_zone 2d_control_a_N 2d_control_b_N, N = 1..3, a trailing * matches a prefix;
-//! default: all)
+//! Run: cargo run --release --example calibration_study [-- CASE ...]   (cases: speed speed_mixed size zone rough
+//! control_a_N control_b_N control_c_N control_d_N 2d_speed 2d_size 2d_zone 2d_control_a_N 2d_control_b_N,
+//! N = 1..3, a trailing * matches a prefix; default: all)
 use std::time::Instant;
 use talus::calibrate::synthetic::{case_2d, case_3d, synthetic_2d, synthetic_3d, zone_overlap, Hidden};
 use talus::calibrate::{self, params::Region, split, CalibrationConfig, Model};
@@ -28,7 +28,7 @@ fn main() {
         std::fs::read_to_string(&summary).ok().and_then(|t| serde_json::from_str(&t).ok()).unwrap_or_default();
     let mut cases: Vec<(String, MakeModel, Hidden)> = Vec::new();
     let seeds = [1u64, 2, 3];
-    for name in ["speed", "size", "zone", "rough"] {
+    for name in ["speed", "speed_mixed", "size", "zone", "rough"] {
         let spec = case_3d(name, 1).unwrap();
         let hidden = spec.hidden.clone();
         cases.push((
@@ -37,7 +37,7 @@ fn main() {
             hidden,
         ));
     }
-    for base in ["control_a", "control_b", "control_c"] {
+    for base in ["control_a", "control_b", "control_c", "control_d"] {
         for s in seeds {
             let spec = case_3d(base, s).unwrap();
             cases.push((

@@ -4,8 +4,8 @@
 //! with a ratio above 0.7 cannot show a 30 % cut however good the loop is.
 //!
 //! Run: cargo run --release --example explore_synthetic [-- NAME ...]   (2d_control_a 2d_control_b 2d_speed_steep
-//! 2d_speed 2d_size 2d_zone speed size zone control_a control_b 3d_designs; default: all but 3d_designs; the 3DRB
-//! ones take about a minute each on 2 cores, 3d_designs 15 minutes)
+//! 2d_speed 2d_size 2d_zone speed speed_mixed size zone control_a control_b control_c control_d 3d_designs;
+//! default: all but 3d_designs; the 3DRB ones take about a minute each on 2 cores, 3d_designs 15 minutes)
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::params::Candidate;
@@ -132,7 +132,7 @@ fn main() {
             report(name, &spec);
         }
     }
-    for name in ["speed", "size", "zone", "control_a", "control_b", "control_c"] {
+    for name in ["speed", "speed_mixed", "size", "zone", "control_a", "control_b", "control_c", "control_d"] {
         if want(name) {
             report(name, &case_3d(name, 1).unwrap());
         }

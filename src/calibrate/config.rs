@@ -26,7 +26,7 @@
 //! [effects]
 //! candidates = ["speed_restitution", "angle_restitution", "mass_restitution", "roughness",
 //!               "rolling_resistance", "soft_drag", "vegetation_drag", "zone"]
-//! min_improvement = 0.05    # relative cut of the cross-validated run-out MAE to keep an effect
+//! min_improvement = 0.05    # relative cut of the cross-validated mean CRPS to keep an effect
 //! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
 //! ```
 
@@ -219,7 +219,7 @@ pub struct EffectsConfig {
     /// effect name → its parameter, fixed (a number) or free (`[min, max]` or `{ min, max, start }`) (default:
     /// none). Only effects with a parameter, not `zone`.
     pub declared: BTreeMap<String, ParamSetting>,
-    /// Smallest relative cut of the cross-validated run-out MAE that counts as an improvement (default 0.05).
+    /// Smallest relative cut of the cross-validated mean CRPS that counts as an improvement (default 0.05).
     pub min_improvement: f64,
     /// Largest one-sided paired permutation p-value for keeping an effect (default 0.05).
     pub alpha: f64,

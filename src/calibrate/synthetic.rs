@@ -82,8 +82,11 @@ pub struct Synthetic3d {
     pub profile: Vec<(f64, f64)>,
     /// A second profile for the northern half (y ≥ 65 m; blended linearly with `profile` over 55–65 m), if any.
     pub north_profile: Option<Vec<(f64, f64)>>,
-    /// Release heights above the ground of the release points, m.
+    /// Release heights above the ground of the release points, m (cycled over the points).
     pub release_heights_m: Vec<f64>,
+    /// Cycle the release heights over the runs of each release point and block instead of over the points, so that
+    /// every point sees every height (a speed effect then cannot pass for a place effect).
+    pub heights_per_run: bool,
     /// Release x of each release point, m (cycled over the points).
     pub release_x_m: Vec<f64>,
     /// The true material.
@@ -124,6 +127,7 @@ impl Default for Synthetic3d {
             profile: vec![(30.0, 15.0), (1000.0, 0.0)],
             north_profile: None,
             release_heights_m: vec![0.5, 4.0, 10.0, 20.0],
+            heights_per_run: false,
             release_x_m: vec![4.0],
             material: TRUE_3D,
             shape: "cube".into(),
@@ -166,7 +170,11 @@ pub const TRUE_3D: [f64; 4] = [0.35, 0.05, 40.0, 32.0];
 /// - `speed` (and `control_a`): rounded boulders; on the southern half they are thrown (3–4 m/s) off 20 m high
 ///   release points onto a flat plain, on the northern half they start 0.5 m above a 20 m long 20° apron that ends
 ///   in the plain. Restitution Cr 0.6. `speed` hides Cr' = Cr/(1 + (v_n/6 m/s)²): the thrown blocks hit fast and
-///   lose almost everything, the rolling ones hit slowly and keep most.
+///   lose almost everything, the rolling ones hit slowly and keep most. There the fast impacts all land on one
+///   patch, so a place effect fits them as well as a speed effect.
+/// - `speed_mixed` (and `control_d`): the same terrain, material and effect, but every release point drops half its
+///   blocks from 20 m and half from 0.5 m ([`Synthetic3d::heights_per_run`]): fast and slow impacts share the
+///   ground, so only a speed effect explains them.
 /// - `zone` (and `control_c`): rounded boulders start 2 m above a 20 m long 30° slope that ends in an 8° plain, on
 ///   which they roll off the 160 m terrain; `zone` hides soft ground (drag 20/s, [`standard_zone`]) on the plain
 ///   below the two southern release points. `rough` hides ground roughness of 0.3 m on the same design: every
@@ -198,7 +206,14 @@ pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
         ..Default::default()
     };
     Some(match name {
-        "speed" => Synthetic3d { hidden: Hidden::SpeedRestitution(6.0), ..two_regime },
+        "speed" => Synthetic3d { hidden: Hidden::SpeedRestitution(6.0), ..two_regime.clone() },
+        "speed_mixed" => Synthetic3d {
+            hidden: Hidden::SpeedRestitution(6.0),
+            release_heights_m: vec![20.0, 0.5],
+            heights_per_run: true,
+            ..two_regime.clone()
+        },
+        "control_d" => Synthetic3d { release_heights_m: vec![20.0, 0.5], heights_per_run: true, ..two_regime.clone() },
         "zone" => Synthetic3d { hidden: Hidden::DragZone(standard_zone(), 20.0), ..plain },
         "control_a" => two_regime,
         "rough" => Synthetic3d { hidden: Hidden::Roughness(0.3), ..plain },
@@ -243,14 +258,15 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
     }
     let mut rng = stream(spec.seed, 7);
     let mut runs = Vec::new();
-    for p in 0..spec.release_points.clamp(1, 4) {
+    for (p, release_y) in release_y.iter().enumerate().take(spec.release_points.clamp(1, 4)) {
         for (b, body) in &bodies {
-            for _ in 0..spec.runs_per_group {
+            for i in 0..spec.runs_per_group {
                 let (x, y) = (
                     spec.release_x_m[p % spec.release_x_m.len()] + 2.0 * (uniform(&mut rng) - 0.5),
-                    release_y[p] + 2.0 * (uniform(&mut rng) - 0.5),
+                    release_y + 2.0 * (uniform(&mut rng) - 0.5),
                 );
-                let z = spec.height_m(x, y) + release_h[p % release_h.len()] + body.bounding_radius_m;
+                let h = if spec.heights_per_run { i } else { p };
+                let z = spec.height_m(x, y) + release_h[h % release_h.len()] + body.bounding_radius_m;
                 let speed = spec.release_speed_mps[0]
                     + (spec.release_speed_mps[1] - spec.release_speed_mps[0]) * uniform(&mut rng);
                 runs.push(FieldRun {
@@ -568,4 +584,39 @@ pub fn zone_overlap(polygon: &[[f64; 2]], truth: &[[f64; 2]]) -> (f64, bool) {
     }
     let c = Vector3::new(cx / inside as f64, cy / inside as f64, 0.0);
     (both as f64 / inside as f64, crate::terrain::point_in_polygon(c.x, c.y, truth))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn heights_per_run_drops_every_height_from_every_release_point() {
+        let heights = |name: &str| -> Vec<(usize, f64)> {
+            let spec = Synthetic3d { runs_per_group: 2, masses_kg: vec![150.0], ..case_3d(name, 1).unwrap() };
+            let model = synthetic_3d(&spec, SimParams::default()).unwrap();
+            let size = RockSize::Mass { mass_kg: 150.0, density_kg_m3: 2650.0 };
+            let r = RockBody::new(&boulder(), size, "").unwrap().bounding_radius_m;
+            let mut out: Vec<(usize, f64)> = model
+                .runs()
+                .iter()
+                .map(|run| {
+                    let [x, y, z] = run.release_m;
+                    let point = ((y - 20.0) / 25.0).round() as usize;
+                    (point, ((z - spec.height_m(x, y) - r) * 10.0).round() / 10.0)
+                })
+                .collect();
+            out.sort_by(|a, b| a.partial_cmp(b).unwrap());
+            out
+        };
+        // `speed`: the two southern points drop 20 m, the northern 0.5 m; `speed_mixed`: each point both.
+        assert_eq!(
+            heights("speed"),
+            vec![(0, 20.0), (0, 20.0), (1, 20.0), (1, 20.0), (2, 0.5), (2, 0.5), (3, 0.5), (3, 0.5)]
+        );
+        assert_eq!(
+            heights("speed_mixed"),
+            vec![(0, 0.5), (0, 20.0), (1, 0.5), (1, 20.0), (2, 0.5), (2, 20.0), (3, 0.5), (3, 20.0)]
+        );
+    }
 }
