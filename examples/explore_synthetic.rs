@@ -5,15 +5,21 @@
 //!
 //! Run: cargo run --release --example explore_synthetic [-- NAME ...]   (2d_control_a 2d_control_b 2d_speed_steep
 //! 2d_speed 2d_size 2d_zone speed speed_mixed size zone control_a control_b control_c control_d 3d_designs;
-//! default: all but 3d_designs; the 3DRB ones take about a minute each on 2 cores, 3d_designs 15 minutes)
+//! crps_noise; default: all but 3d_designs and crps_noise; the 3DRB ones take about a minute each on 2 cores,
+//! 3d_designs 15 minutes)
+use talus::calibrate::config::Objective;
+use talus::calibrate::effects::MOBILITY_GRID;
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
+use talus::calibrate::objective::objective;
 use talus::calibrate::params::Candidate;
+use talus::calibrate::params::MOBILITY;
 use talus::calibrate::synthetic::{
     case_2d, case_3d, material_params_2d, material_params_3d, standard_zone, steep_2d, synthetic_2d, synthetic_3d,
     truth_2d, truth_3d, Hidden, Synthetic2d, Synthetic3d, TRUE_2D,
 };
 use talus::calibrate::Model;
+use talus::calibrate::{split, CalibrationConfig};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
 
@@ -67,6 +73,29 @@ fn report_2d(name: &str, spec: &Synthetic2d) {
         "{name:<12} runs {:>3} obs mean {:>6.1}  oracle mae {:>5.2} floor {:>5.2} | best no-effect mae {:>5.2} (rn {} rt {} phi {}) ratio {:.2}",
         all.len(), mt.observed_mean_m, mt.runout_mae_m, mt.scatter_floor_mae_m, best.0, best.1, best.2, best.3, mt.runout_mae_m / best.0
     );
+}
+
+/// How noisy is the effects loop's screening score? The mean CRPS over the `speed` case's calibration runs (the
+/// default seeded split) of its baseline fit (seed 1: Cr 0.43, friction 38.4°/29.2°) at each mobility factor of the
+/// screening, with 4 repeats per run (the screening's `search_repeats`) and with 20, on four seeds.
+fn crps_noise() {
+    let model = synthetic_3d(&case_3d("speed", 1).unwrap(), SimParams::default()).unwrap();
+    let cfg = CalibrationConfig::default();
+    let (cal, _) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+    for m in MOBILITY_GRID {
+        let mut c =
+            Candidate { params: material_params_3d("default", [0.4314, 0.05, 38.43, 29.20]), ..Default::default() };
+        c.params.set(MOBILITY, m);
+        let mut line = format!("mobility {m:.2}: mean CRPS (m) at 4 / 20 repeats, seeds 1 2 3 4:");
+        for repeats in [4, 20] {
+            for seed in 1..=4 {
+                let sims = evaluate(&model, &c, &cal, repeats, seed, 0).unwrap();
+                line += &format!(" {:.2}", objective(Objective::Crps, model.runs(), &sims));
+            }
+            line += " |";
+        }
+        println!("{line}");
+    }
 }
 
 fn main() {
@@ -131,6 +160,9 @@ fn main() {
             }
             report(name, &spec);
         }
+    }
+    if args.iter().any(|a| a == "crps_noise") {
+        crps_noise();
     }
     for name in ["speed", "speed_mixed", "size", "zone", "control_a", "control_b", "control_c", "control_d"] {
         if want(name) {
