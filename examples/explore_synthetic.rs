@@ -12,14 +12,12 @@ use talus::calibrate::effects::MOBILITY_GRID;
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::objective::objective;
-use talus::calibrate::params::Candidate;
-use talus::calibrate::params::MOBILITY;
+use talus::calibrate::params::{Candidate, MOBILITY};
 use talus::calibrate::synthetic::{
     case_2d, case_3d, material_params_2d, material_params_3d, standard_zone, steep_2d, synthetic_2d, synthetic_3d,
     truth_2d, truth_3d, Hidden, Synthetic2d, Synthetic3d, TRUE_2D,
 };
-use talus::calibrate::Model;
-use talus::calibrate::{split, CalibrationConfig};
+use talus::calibrate::{split, CalibrationConfig, Model};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
 

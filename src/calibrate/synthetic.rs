@@ -174,7 +174,7 @@ pub const TRUE_3D: [f64; 4] = [0.35, 0.05, 40.0, 32.0];
 ///   patch, so a place effect fits them as well as a speed effect.
 /// - `speed_mixed` (and `control_d`): the same terrain, material and effect, but every release point drops half its
 ///   blocks from 20 m and half from 0.5 m ([`Synthetic3d::heights_per_run`]): fast and slow impacts share the
-///   ground, so only a speed effect explains them.
+///   ground, so a place effect cannot explain them (an angle effect still can: the fast drops hit steeply).
 /// - `zone` (and `control_c`): rounded boulders start 2 m above a 20 m long 30° slope that ends in an 8° plain, on
 ///   which they roll off the 160 m terrain; `zone` hides soft ground (drag 20/s, [`standard_zone`]) on the plain
 ///   below the two southern release points. `rough` hides ground roughness of 0.3 m on the same design: every
@@ -195,6 +195,7 @@ pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
         shape: "boulder".into(),
         ..Default::default()
     };
+    let mixed = Synthetic3d { release_heights_m: vec![20.0, 0.5], heights_per_run: true, ..two_regime.clone() };
     let drops = Synthetic3d { seed, runs_per_group: 6, material: [0.35, 0.02, 40.0, 32.0], ..Default::default() };
     let plain = Synthetic3d {
         seed,
@@ -206,14 +207,9 @@ pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
         ..Default::default()
     };
     Some(match name {
-        "speed" => Synthetic3d { hidden: Hidden::SpeedRestitution(6.0), ..two_regime.clone() },
-        "speed_mixed" => Synthetic3d {
-            hidden: Hidden::SpeedRestitution(6.0),
-            release_heights_m: vec![20.0, 0.5],
-            heights_per_run: true,
-            ..two_regime.clone()
-        },
-        "control_d" => Synthetic3d { release_heights_m: vec![20.0, 0.5], heights_per_run: true, ..two_regime.clone() },
+        "speed" => Synthetic3d { hidden: Hidden::SpeedRestitution(6.0), ..two_regime },
+        "speed_mixed" => Synthetic3d { hidden: Hidden::SpeedRestitution(6.0), ..mixed },
+        "control_d" => mixed,
         "zone" => Synthetic3d { hidden: Hidden::DragZone(standard_zone(), 20.0), ..plain },
         "control_a" => two_regime,
         "rough" => Synthetic3d { hidden: Hidden::Roughness(0.3), ..plain },
