@@ -28,6 +28,7 @@
 //!               "rolling_resistance", "soft_drag", "vegetation_drag", "zone"]
 //! min_improvement = 0.05    # relative cut of the cross-validated mean CRPS to keep an effect
 //! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
+//! # screen_repeats = 20     # simulations per run in the loop's grid screening (default search_repeats)
 //! ```
 
 use super::effects::{by_name, effects_for};
@@ -238,6 +239,11 @@ pub struct EffectsConfig {
     /// Largest optimiser evaluations of each fold's refit in the cross-validation that confirms a promising
     /// effect (default 20 for 3DRB, 100 for 2DLM; the refit starts from the fold's best grid setting).
     pub cv_refit_evaluations: Option<usize>,
+    /// Simulations per run of every setting in the grid screening (default `search_repeats`). At 4 a candidate's
+    /// campaign-mean CRPS moves by up to a metre between seeds on the synthetic 3DRB campaigns, and an effect,
+    /// which changes every trajectory, does not share the baseline's draw; more repeats make the screening fair
+    /// without making the population fit dearer (docs/calibration.md, "Speed against angle and place").
+    pub screen_repeats: Option<usize>,
 }
 
 impl Default for EffectsConfig {
@@ -253,6 +259,7 @@ impl Default for EffectsConfig {
             permutations: 999,
             refit_evaluations: None,
             cv_refit_evaluations: None,
+            screen_repeats: None,
         }
     }
 }
@@ -403,12 +410,18 @@ impl CalibrationConfig {
         self.effects.cv_refit_evaluations.unwrap_or(default_evaluations(model).2)
     }
 
+    /// Simulations per run of each setting in the effects loop's grid screening.
+    pub fn screen_repeats(&self) -> usize {
+        self.effects.screen_repeats.unwrap_or(self.search_repeats)
+    }
+
     /// These settings with the budgets left out filled in for `model` (as the report records them).
     pub fn resolved(&self, model: ModelKind) -> CalibrationConfig {
         let mut c = self.clone();
         c.max_evaluations = Some(self.max_evaluations(model));
         c.effects.refit_evaluations = Some(self.refit_evaluations(model));
         c.effects.cv_refit_evaluations = Some(self.cv_refit_evaluations(model));
+        c.effects.screen_repeats = Some(self.screen_repeats());
         c
     }
 
@@ -451,6 +464,13 @@ impl CalibrationConfig {
                 f("search_repeats"),
                 format!("must be in [1, repeats = {}], got {}", self.repeats, self.search_repeats),
                 "use for example 4",
+            ));
+        }
+        if !(1..=self.repeats).contains(&self.screen_repeats()) {
+            return Err(Error::invalid(
+                f("effects.screen_repeats"),
+                format!("must be in [1, repeats = {}], got {}", self.repeats, self.screen_repeats()),
+                "leave it out (search_repeats) or use up to repeats, for example 20",
             ));
         }
         if !(1..=MAX_SEARCH_STARTS).contains(&self.search_starts) {
@@ -723,6 +743,11 @@ mod tests {
         assert!(e.contains("c.toml: release_attempts") && e.contains("got 0"), "{e}");
         let e = CalibrationConfig::from_toml_str("outer_repeats = 11\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: outer_repeats") && e.contains("got 11"), "{e}");
+        assert_eq!(cfg.screen_repeats(), 4);
+        let c = CalibrationConfig::from_toml_str("[effects]\nscreen_repeats = 20\n", "c.toml").unwrap();
+        assert_eq!((c.search_repeats, c.screen_repeats()), (4, 20));
+        let e = CalibrationConfig::from_toml_str("[effects]\nscreen_repeats = 21\n", "c.toml").unwrap_err().to_string();
+        assert!(e.contains("c.toml: effects.screen_repeats") && e.contains("got 21"), "{e}");
         let e = cfg.check_materials(ModelKind::Rigid3d, &["rock".into()], "c.toml").unwrap_err().to_string();
         assert!(e.contains("materials.default"), "{e}");
     }

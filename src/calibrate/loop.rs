@@ -4,7 +4,8 @@
 //!
 //! **Nested cross-validation** (ours, designed to cost a handful of model evaluations per effect): the
 //! calibration runs are split into `inner_folds` folds (stratified by release group). Each arm of the comparison
-//! has a small set of settings, every setting simulated once for all calibration runs with common random numbers:
+//! has a small set of settings, every setting simulated for all calibration runs (`screen_repeats` times each,
+//! default `search_repeats`) with common random numbers:
 //! - the *baseline arm*: the current model re-centred by a global mobility factor m ∈ {1/1.44, 1/1.2, 1, 1.2,
 //!   1.44} ([`super::params::apply_mobility_3d`]);
 //! - an *effect arm*: the effect's parameter on its grid × the same mobility factors (so the effect is not
@@ -191,7 +192,7 @@ pub fn effects_loop(
         for &m in &MOBILITY_GRID {
             let mut c = current.clone();
             c.params.set(MOBILITY, m);
-            base_arm.settings.push(ctx.sims(&c, cal, cfg.search_repeats)?);
+            base_arm.settings.push(ctx.sims(&c, cal, cfg.screen_repeats())?);
             base_arm.cands.push(c);
         }
         base_arm.fold_settings = vec![(0..base_arm.settings.len()).collect(); cfg.inner_folds];
@@ -220,7 +221,7 @@ pub fn effects_loop(
                             Recentring::DynamicFriction => scale_dynamic_friction(&mut c, m),
                             Recentring::Mobility => c.params.set(MOBILITY, m),
                         }
-                        arm.settings.push(ctx.sims(&c, cal, cfg.search_repeats)?);
+                        arm.settings.push(ctx.sims(&c, cal, cfg.screen_repeats())?);
                         arm.cands.push(c);
                     }
                 }
