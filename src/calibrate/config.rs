@@ -288,7 +288,8 @@ pub struct CalibrationConfig {
     pub seed: u64,
     /// Simulations per run for the reported metrics (default 20).
     pub repeats: usize,
-    /// Simulations per run inside the optimiser and the effects loop (default 4). Common random numbers make the
+    /// Simulations per run inside the optimiser and the effects loop's screening (default 4; the screening's own
+    /// count is `effects.screen_repeats` when set). Common random numbers make the
     /// comparison of candidates fair with few repeats; the objectives pool all repeats of a group.
     pub search_repeats: usize,
     /// Searches of the population fit, each on its own random numbers; the one best on fresh numbers is kept
