@@ -91,8 +91,9 @@ pub struct Synthetic3d {
     pub release_x_m: Vec<f64>,
     /// The true material.
     pub material: [f64; 4],
-    /// Initial speed down +x, drawn uniformly in [min, max], m/s.
-    pub release_speed_mps: [f64; 2],
+    /// Initial speed down +x, drawn uniformly in [min, max], m/s; cycled with the release heights (a run released
+    /// from `release_heights_m[h]` draws from `release_speeds_mps[h % len]`).
+    pub release_speeds_mps: Vec<[f64; 2]>,
     /// Block shape: `cube`, `flat_box`, `smartie`, or `boulder` (a rounded 32-vertex hull, see [`boulder`]).
     pub shape: String,
 }
@@ -131,7 +132,7 @@ impl Default for Synthetic3d {
             release_x_m: vec![4.0],
             material: TRUE_3D,
             shape: "cube".into(),
-            release_speed_mps: [0.5, 1.5],
+            release_speeds_mps: vec![[0.5, 1.5]],
         }
     }
 }
@@ -190,7 +191,7 @@ pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
         profile: vec![(1000.0, 0.0)],
         north_profile: Some(vec![(20.0, 20.0), (1000.0, 0.0)]),
         release_heights_m: vec![20.0, 20.0, 0.5, 0.5],
-        release_speed_mps: [3.0, 4.0],
+        release_speeds_mps: vec![[3.0, 4.0]],
         material: [0.6, 0.02, 40.0, 32.0],
         shape: "boulder".into(),
         ..Default::default()
@@ -263,8 +264,8 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
                 );
                 let h = if spec.heights_per_run { i } else { p };
                 let z = spec.height_m(x, y) + release_h[h % release_h.len()] + body.bounding_radius_m;
-                let speed = spec.release_speed_mps[0]
-                    + (spec.release_speed_mps[1] - spec.release_speed_mps[0]) * uniform(&mut rng);
+                let [lo, hi] = spec.release_speeds_mps[h % spec.release_speeds_mps.len()];
+                let speed = lo + (hi - lo) * uniform(&mut rng);
                 runs.push(FieldRun {
                     id: format!("s{:03}", runs.len() + 1),
                     index: runs.len(),
