@@ -28,7 +28,7 @@
 //!               "rolling_resistance", "soft_drag", "vegetation_drag", "zone"]
 //! min_improvement = 0.05    # relative cut of the cross-validated mean CRPS to keep an effect
 //! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
-//! # screen_repeats = 20     # simulations per run in the loop's grid screening (default search_repeats)
+//! # screen_repeats = 20     # simulations per run in the loop's grid screening (default: repeats)
 //! ```
 
 use super::effects::{by_name, effects_for};
@@ -239,10 +239,11 @@ pub struct EffectsConfig {
     /// Largest optimiser evaluations of each fold's refit in the cross-validation that confirms a promising
     /// effect (default 20 for 3DRB, 100 for 2DLM; the refit starts from the fold's best grid setting).
     pub cv_refit_evaluations: Option<usize>,
-    /// Simulations per run of every setting in the grid screening (default `search_repeats`). At 4 a candidate's
-    /// campaign-mean CRPS moves by up to a metre between seeds on the synthetic 3DRB campaigns, and an effect,
-    /// which changes every trajectory, does not share the baseline's draw; more repeats make the screening fair
-    /// without making the population fit dearer (docs/calibration.md, "Speed against angle and place").
+    /// Simulations per run of every setting in the grid screening (default `repeats`, as many as the reported
+    /// metrics use; until 2026-11-25 it was `search_repeats`). At 4 a candidate's campaign-mean CRPS moves by up
+    /// to a metre between seeds on the synthetic 3DRB campaigns, and an effect, which changes every trajectory,
+    /// does not share the baseline's draw; 20 make the screening fair without making the population fit dearer
+    /// (docs/calibration.md, "Speed against angle and place").
     pub screen_repeats: Option<usize>,
 }
 
@@ -288,8 +289,8 @@ pub struct CalibrationConfig {
     pub seed: u64,
     /// Simulations per run for the reported metrics (default 20).
     pub repeats: usize,
-    /// Simulations per run inside the optimiser and the effects loop's screening (default 4; the screening's own
-    /// count is `effects.screen_repeats` when set). Common random numbers make the
+    /// Simulations per run inside the optimiser (default 4; the effects loop's screening uses
+    /// `effects.screen_repeats`, by default `repeats`). Common random numbers make the
     /// comparison of candidates fair with few repeats; the objectives pool all repeats of a group.
     pub search_repeats: usize,
     /// Searches of the population fit, each on its own random numbers; the one best on fresh numbers is kept
@@ -413,7 +414,7 @@ impl CalibrationConfig {
 
     /// Simulations per run of each setting in the effects loop's grid screening.
     pub fn screen_repeats(&self) -> usize {
-        self.effects.screen_repeats.unwrap_or(self.search_repeats)
+        self.effects.screen_repeats.unwrap_or(self.repeats)
     }
 
     /// These settings with the budgets left out filled in for `model` (as the report records them).
@@ -744,9 +745,10 @@ mod tests {
         assert!(e.contains("c.toml: release_attempts") && e.contains("got 0"), "{e}");
         let e = CalibrationConfig::from_toml_str("outer_repeats = 11\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: outer_repeats") && e.contains("got 11"), "{e}");
-        assert_eq!(cfg.screen_repeats(), 4);
-        let c = CalibrationConfig::from_toml_str("[effects]\nscreen_repeats = 20\n", "c.toml").unwrap();
-        assert_eq!((c.search_repeats, c.screen_repeats()), (4, 20));
+        assert_eq!((cfg.search_repeats, cfg.screen_repeats()), (4, 20));
+        let c = CalibrationConfig::from_toml_str("repeats = 30\n[effects]\nscreen_repeats = 4\n", "c.toml").unwrap();
+        assert_eq!((c.repeats, c.screen_repeats()), (30, 4));
+        assert_eq!(CalibrationConfig::from_toml_str("repeats = 30\n", "c.toml").unwrap().screen_repeats(), 30);
         let e = CalibrationConfig::from_toml_str("[effects]\nscreen_repeats = 21\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: effects.screen_repeats") && e.contains("got 21"), "{e}");
         let e = cfg.check_materials(ModelKind::Rigid3d, &["rock".into()], "c.toml").unwrap_err().to_string();
