@@ -737,6 +737,8 @@ fn zone_arm(
     let mid = MOBILITY_GRID.len() / 2;
     let (reference, base) = (&base_arm.settings[mid], &base_arm.cands[mid]);
     let mut arm = Arm { fold_settings: vec![Vec::new(); k], ..Default::default() };
+    // Folds often find the same zone: each region's settings are simulated once, from this index on.
+    let mut simulated: Vec<(Region, usize)> = Vec::new();
     for f in 0..=k {
         // f == k: all calibration runs.
         let train: Vec<RunSims> =
@@ -757,17 +759,20 @@ fn zone_arm(
         let settings: Vec<(f64, f64)> =
             ZONE_MOBILITY_GRID.iter().map(|&z| (z, 0.0)).chain(drags.iter().map(|&c| (1.0, c))).collect();
         for region in &regions {
-            for &(z, drag) in &settings {
-                let c = with_zone(model, base, label, region, z, drag);
-                let sims = sims_reusing(ctx, &c, cal, reference, region)?;
-                arm.settings.push(sims);
-                arm.cands.push(c);
-                if f < k {
-                    arm.fold_settings[f].push(arm.settings.len() - 1);
-                } else {
-                    arm.full.push(arm.settings.len() - 1);
+            let first = match simulated.iter().find(|(r, _)| r == region) {
+                Some(&(_, first)) => first,
+                None => {
+                    simulated.push((region.clone(), arm.settings.len()));
+                    for &(z, drag) in &settings {
+                        let c = with_zone(model, base, label, region, z, drag);
+                        arm.settings.push(sims_reusing(ctx, &c, cal, reference, region)?);
+                        arm.cands.push(c);
+                    }
+                    arm.settings.len() - settings.len()
                 }
-            }
+            };
+            let chosen = if f < k { &mut arm.fold_settings[f] } else { &mut arm.full };
+            chosen.extend(first..first + settings.len());
         }
     }
     Ok(arm)
