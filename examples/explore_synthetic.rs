@@ -228,7 +228,7 @@ fn main() {
         };
         let size = case_3d("size", 1).unwrap();
         let size_boulder = Synthetic3d { shape: "boulder".into(), ..size.clone() };
-        for (name, spec) in [
+        let designs = [
             ("thrown3", thrown.clone()),
             ("thrown3_none", Synthetic3d { hidden: Hidden::None, ..thrown }),
             ("apron", apron(20.0, vec![20.0, 0.5])),
@@ -239,8 +239,11 @@ fn main() {
             ("size_boulder", size_boulder.clone()),
             ("size_06", Synthetic3d { hidden: Hidden::MassRestitution(-0.6), ..size }),
             ("size_boulder_06", Synthetic3d { hidden: Hidden::MassRestitution(-0.6), ..size_boulder }),
-        ] {
-            if args.len() > 1 && !args.iter().any(|a| a == name) {
+        ];
+        // Only the designs named, if any are.
+        let named = designs.iter().any(|(n, _)| args.iter().any(|a| a == n));
+        for (name, spec) in designs {
+            if named && !args.iter().any(|a| a == name) {
                 continue;
             }
             if args.iter().any(|a| a == "rivals") {
