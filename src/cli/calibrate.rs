@@ -42,7 +42,8 @@ pub struct CalibrateArgs {
     /// Seed (overrides the settings).
     #[arg(long)]
     seed: Option<u64>,
-    /// Simulations per run for the reported metrics (overrides the settings; default 20).
+    /// Simulations per run for the reported metrics and, unless `[effects] screen_repeats` is set, the effects
+    /// loop's screening (overrides the settings; default 20).
     #[arg(long)]
     repeats: Option<usize>,
     /// Threads (default: all cores). Results do not depend on it.
