@@ -11,6 +11,7 @@ use talus::calibrate::config::Objective;
 use talus::calibrate::effects::{EffectKind, MOBILITY_GRID};
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
+use talus::calibrate::model3d::Model3d;
 use talus::calibrate::objective::objective;
 use talus::calibrate::params::{Candidate, EffectSpec, MOBILITY};
 use talus::calibrate::synthetic::{
@@ -21,7 +22,8 @@ use talus::calibrate::{split, CalibrationConfig, Model};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
 
-fn report(name: &str, spec: &Synthetic3d) {
+/// Returns the campaign's model.
+fn report(name: &str, spec: &Synthetic3d) -> Model3d {
     let model = synthetic_3d(spec, SimParams::default()).unwrap();
     let all: Vec<usize> = (0..model.runs().len()).collect();
     let t = evaluate(&model, &truth_3d(spec), &all, 20, 1, 0).unwrap();
@@ -44,14 +46,14 @@ fn report(name: &str, spec: &Synthetic3d) {
         "{name:<12} runs {:>3} obs mean {:>6.1}  oracle mae {:>5.2} floor {:>5.2} | best no-effect mae {:>5.2} (cr {} phi {}) ratio {:.2}",
         all.len(), mt.observed_mean_m, mt.runout_mae_m, mt.scatter_floor_mae_m, best.0, best.1, best.2, mt.runout_mae_m / best.0
     );
+    model
 }
 
 /// [`report`] plus the best run-out MAE of the model with angle-dependent restitution instead of the hidden effect
 /// (Cr, friction and the exponent on a grid): a design where this rival comes as close as the true model cannot
 /// tell speed from angle.
 fn report_rivals(name: &str, spec: &Synthetic3d) {
-    report(name, spec);
-    let model = synthetic_3d(spec, SimParams::default()).unwrap();
+    let model = report(name, spec);
     let all: Vec<usize> = (0..model.runs().len()).collect();
     let mut best = (f64::INFINITY, 0.0, 0.0, 0.0);
     for cr in [0.2, 0.3, 0.4, 0.5, 0.6, 0.8] {
@@ -107,7 +109,8 @@ fn report_2d(name: &str, spec: &Synthetic2d) {
 
 /// How noisy is the effects loop's screening score? The mean CRPS over the `speed` case's calibration runs (the
 /// default seeded split) of its baseline fit (seed 1: Cr 0.43, friction 38.4°/29.2°) at each mobility factor of the
-/// screening, with 4 repeats per run (the screening's `search_repeats`) and with 20, on four seeds.
+/// screening, with 4 repeats per run (the screening's default until stop 26, `search_repeats`) and with 20 (its default
+/// since), on four seeds.
 fn crps_noise() {
     let model = synthetic_3d(&case_3d("speed", 1).unwrap(), SimParams::default()).unwrap();
     let cfg = CalibrationConfig::default();

@@ -472,7 +472,7 @@ impl CalibrationConfig {
             return Err(Error::invalid(
                 f("effects.screen_repeats"),
                 format!("must be in [1, repeats = {}], got {}", self.repeats, self.screen_repeats()),
-                "leave it out (search_repeats) or use up to repeats, for example 20",
+                "leave it out (it then equals repeats) or use at most repeats, for example 20",
             ));
         }
         if !(1..=MAX_SEARCH_STARTS).contains(&self.search_starts) {

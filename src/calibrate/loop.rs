@@ -5,7 +5,7 @@
 //! **Nested cross-validation** (ours, designed to cost a handful of model evaluations per effect): the
 //! calibration runs are split into `inner_folds` folds (stratified by release group). Each arm of the comparison
 //! has a small set of settings, every setting simulated for all calibration runs (`screen_repeats` times each,
-//! default `search_repeats`) with common random numbers:
+//! default `repeats`) with common random numbers:
 //! - the *baseline arm*: the current model re-centred by a global mobility factor m ∈ {1/1.44, 1/1.2, 1, 1.2,
 //!   1.44} ([`super::params::apply_mobility_3d`]);
 //! - an *effect arm*: the effect's parameter on its grid × the same mobility factors (so the effect is not
@@ -762,13 +762,14 @@ fn zone_arm(
             let first = match simulated.iter().find(|(r, _)| r == region) {
                 Some(&(_, first)) => first,
                 None => {
-                    simulated.push((region.clone(), arm.settings.len()));
+                    let first = arm.settings.len();
+                    simulated.push((region.clone(), first));
                     for &(z, drag) in &settings {
                         let c = with_zone(model, base, label, region, z, drag);
                         arm.settings.push(sims_reusing(ctx, &c, cal, reference, region)?);
                         arm.cands.push(c);
                     }
-                    arm.settings.len() - settings.len()
+                    first
                 }
             };
             let chosen = if f < k { &mut arm.fold_settings[f] } else { &mut arm.full };
