@@ -4,7 +4,8 @@
 //! on stdout; a case run again replaces its row, the others keep theirs), and a full report per case.
 //!
 //! Run: cargo run --release --example calibration_study [-- CASE ...]   (cases: speed speed_mixed size zone rough
-//! control_a_N control_b_N control_c_N control_d_N 2d_speed 2d_size 2d_zone 2d_control_a_N 2d_control_b_N,
+//! speed_tracked speed_mixed_tracked speed_2 speed_3 speed_tracked_2 speed_tracked_3 control_a_N control_b_N control_c_N control_d_N control_a_tracked_N
+//! control_d_tracked_N 2d_speed 2d_speed_tracked 2d_control_a_tracked_N 2d_size 2d_zone 2d_control_a_N 2d_control_b_N,
 //! N = 1..3, a trailing * matches a prefix; default: all)
 use std::time::Instant;
 use talus::calibrate::synthetic::{case_2d, case_3d, synthetic_2d, synthetic_3d, zone_overlap, Hidden};
@@ -28,16 +29,18 @@ fn main() {
         std::fs::read_to_string(&summary).ok().and_then(|t| serde_json::from_str(&t).ok()).unwrap_or_default();
     let mut cases: Vec<(String, MakeModel, Hidden)> = Vec::new();
     let seeds = [1u64, 2, 3];
-    for name in ["speed", "speed_mixed", "size", "zone", "rough"] {
-        let spec = case_3d(name, 1).unwrap();
+    // The effect cases on data seed 1 (`NAME`), and the speed case with and without tracks on seeds 2 and 3 as well
+    // (`NAME_2`, `NAME_3`).
+    let effect_cases = ["speed", "speed_mixed", "size", "zone", "rough", "speed_tracked", "speed_mixed_tracked"]
+        .into_iter()
+        .map(|n| (n.to_string(), n, 1))
+        .chain(["speed", "speed_tracked"].into_iter().flat_map(|n| [2, 3].map(|s| (format!("{n}_{s}"), n, s))));
+    for (label, name, seed) in effect_cases {
+        let spec = case_3d(name, seed).unwrap();
         let hidden = spec.hidden.clone();
-        cases.push((
-            name.to_string(),
-            Box::new(move || Box::new(synthetic_3d(&spec, SimParams::default()).unwrap())),
-            hidden,
-        ));
+        cases.push((label, Box::new(move || Box::new(synthetic_3d(&spec, SimParams::default()).unwrap())), hidden));
     }
-    for base in ["control_a", "control_b", "control_c", "control_d"] {
+    for base in ["control_a", "control_b", "control_c", "control_d", "control_a_tracked", "control_d_tracked"] {
         for s in seeds {
             let spec = case_3d(base, s).unwrap();
             cases.push((
@@ -47,7 +50,7 @@ fn main() {
             ));
         }
     }
-    for base in ["speed", "size", "zone", "control_a", "control_b"] {
+    for base in ["speed", "size", "zone", "control_a", "control_b", "speed_tracked", "control_a_tracked"] {
         let seeds: &[u64] = if base.starts_with("control") { &seeds } else { &[1] };
         for &s in seeds {
             let spec = case_2d(base, s).unwrap();
@@ -90,6 +93,8 @@ fn main() {
             "case": name, "hidden": format!("{hidden:?}"), "effects_added": added, "named_right": named,
             "holdout_runout_mae_before_m": b, "holdout_runout_mae_after_m": f, "cut": 1.0 - f / b,
             "zone_overlap": overlap, "time_s": t.elapsed().as_secs_f64(), "simulations": r.timing.simulations,
+            "holdout_rebound_mae_before_m": r.baseline.holdout.rebound_mae_m,
+            "holdout_rebound_mae_after_m": r.final_stage.holdout.rebound_mae_m,
             "baseline_parameters": r.baseline.parameters, "final_parameters": r.final_stage.parameters,
         });
         println!("{row}");

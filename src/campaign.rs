@@ -35,6 +35,15 @@ pub struct Deposition {
     pub runout_m: f64,
 }
 
+/// One point of a tracked path.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackPoint {
+    /// Time, s.
+    pub time_s: f64,
+    /// Position of the centre of mass, m.
+    pub position_m: [f64; 3],
+}
+
 /// A block.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Block {
@@ -61,14 +70,16 @@ pub struct Campaign {
     pub depositions: BTreeMap<String, Deposition>,
     /// Blocks by id.
     pub blocks: BTreeMap<String, Block>,
+    /// Tracked paths by run id (`observed_trajectories.csv`, optional), in time order.
+    pub tracks: BTreeMap<String, Vec<TrackPoint>>,
 }
 
 /// Hint for a missing campaign column.
 const COLUMN_HINT: &str = "add the column (see the campaign format in README.md)";
 
 impl Campaign {
-    /// Reads `release_points.csv`, `observed_deposition.csv` (optional: a campaign to predict has none) and
-    /// `block_metadata.csv` from `dir`.
+    /// Reads `release_points.csv`, `observed_deposition.csv` (optional: a campaign to predict has none),
+    /// `block_metadata.csv` and `observed_trajectories.csv` (optional) from `dir`.
     pub fn read(dir: &Path) -> Result<Campaign> {
         let rel = Table::read(&dir.join("release_points.csv"), false)?;
         // `y_m` may be absent in a profile (2D) campaign: it is then 0.
@@ -171,7 +182,8 @@ impl Campaign {
                 depositions.insert(tid.clone(), Deposition { trajectory_id: tid, position_m: p, runout_m });
             }
         }
-        Ok(Campaign { dir: dir.to_path_buf(), releases, depositions, blocks })
+        let tracks = read_tracks(&dir.join("observed_trajectories.csv"), &releases)?;
+        Ok(Campaign { dir: dir.to_path_buf(), releases, depositions, blocks, tracks })
     }
 
     /// The rock body of a block. The shape is the block's own if given; otherwise inferred from its sizes (our
@@ -199,6 +211,52 @@ impl Campaign {
         };
         RockBody::new(&kind, RockSize::DimensionsAndMass { size_m: block.size_m, mass_kg: block.mass_kg }, &field)
     }
+}
+
+/// Reads tracked paths (`trajectory_id`, `time_s`, `x_m`, `y_m` (absent on a profile), `z_m`), if the file
+/// exists. A run's rows may be anywhere in the file but must come in increasing time.
+fn read_tracks(path: &Path, releases: &[Release]) -> Result<BTreeMap<String, Vec<TrackPoint>>> {
+    let mut tracks: BTreeMap<String, Vec<TrackPoint>> = BTreeMap::new();
+    if !path.is_file() {
+        return Ok(tracks);
+    }
+    let t = Table::read(path, false)?;
+    let (id, time, x, z) = (
+        t.need("trajectory_id", COLUMN_HINT)?,
+        t.need("time_s", COLUMN_HINT)?,
+        t.need("x_m", COLUMN_HINT)?,
+        t.need("z_m", COLUMN_HINT)?,
+    );
+    for row in &t.rows {
+        let tid = t.text(row, id, "trajectory_id")?;
+        if !releases.iter().any(|r| r.trajectory_id == tid) {
+            return Err(t.error(
+                row,
+                format!("run '{tid}' has no release in release_points.csv"),
+                "fix the trajectory_id",
+            ));
+        }
+        let point = TrackPoint {
+            time_s: t.number(row, time, "time_s")?,
+            position_m: [
+                t.number(row, x, "x_m")?,
+                t.optional_number(row, "y_m")?.unwrap_or(0.0),
+                t.number(row, z, "z_m")?,
+            ],
+        };
+        let track = tracks.entry(tid.to_string()).or_default();
+        if let Some(last) = track.last() {
+            if point.time_s <= last.time_s {
+                return Err(t.error(
+                    row,
+                    format!("run '{tid}' goes back in time: time_s {} after {}", point.time_s, last.time_s),
+                    "list each run's points in increasing time_s",
+                ));
+            }
+        }
+        track.push(point);
+    }
+    Ok(tracks)
 }
 
 #[cfg(test)]
@@ -239,6 +297,27 @@ mod tests {
         let (_d, c) = campaign(RELEASE, &bad.replace('\n', "\r\n"), DEPOSITION);
         let e = err(c);
         assert!(e.contains("block_metadata.csv:3"), "{e}");
+    }
+
+    #[test]
+    fn tracked_paths_are_read_in_time_order_and_bad_ones_named() {
+        let (d, c) = campaign(RELEASE, BLOCKS, DEPOSITION);
+        assert!(c.unwrap().tracks.is_empty());
+        let file = d.path().join("observed_trajectories.csv");
+        std::fs::write(&file, "trajectory_id,time_s,x_m,y_m,z_m\nr1,0,0,0,10\nr2,0,0,1,10\nr1,0.1,0.5,0,9.9\n")
+            .unwrap();
+        let c = Campaign::read(d.path()).unwrap();
+        assert_eq!(c.tracks["r1"].len(), 2);
+        assert_eq!(c.tracks["r1"][1].position_m, [0.5, 0.0, 9.9]);
+        std::fs::write(&file, "trajectory_id,time_s,x_m,y_m,z_m\nr1,0,0,0,10\nr1,0,0.5,0,9.9\n").unwrap();
+        let e = Campaign::read(d.path()).unwrap_err().to_string();
+        assert!(e.contains("observed_trajectories.csv:3") && e.contains("back in time"), "{e}");
+        std::fs::write(&file, "trajectory_id,time_s,x_m,y_m,z_m\nr9,0,0,0,10\n").unwrap();
+        let e = Campaign::read(d.path()).unwrap_err().to_string();
+        assert!(e.contains("observed_trajectories.csv:2") && e.contains("r9"), "{e}");
+        std::fs::write(&file, "trajectory_id,x_m,y_m,z_m\nr1,0,0,10\n").unwrap();
+        let e = Campaign::read(d.path()).unwrap_err().to_string();
+        assert!(e.contains("observed_trajectories.csv") && e.contains("time_s"), "{e}");
     }
 
     #[test]

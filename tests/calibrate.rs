@@ -326,6 +326,18 @@ fn profile_loop_finds_hidden_speed_dependent_restitution() {
 }
 
 #[test]
+fn profile_loop_with_tracked_rebounds_finds_speed_dependent_restitution_and_fits_the_bounces() {
+    // The speed case with each run's rebound height observed (noise 0.1 m): the score weighs the rebounds too.
+    let r = profile_case("speed_tracked", 1);
+    let k = named_with_cut(&r, "speed_restitution").parameters["speed_restitution.k_mps"];
+    assert!((7.0..14.0).contains(&k), "K {k} m/s, hidden 10");
+    let (before, after) = (r.baseline.holdout.rebound_mae_m.unwrap(), r.final_stage.holdout.rebound_mae_m.unwrap());
+    assert!(after < 0.5 * before, "held-out rebound MAE {before:.3} -> {after:.3} m");
+    assert!(r.settings.rebound_weight.is_some_and(|w| w > 0.0), "the default weight is set from the data");
+    assert!(r.diagnostics.iter().any(|d| d.residual == "rebound"), "the rebound residual is diagnosed");
+}
+
+#[test]
 fn profile_loop_finds_hidden_mass_dependent_restitution() {
     // Rn grows with mass as (m/500 kg)^0.3: 50 kg rocks bounce half as high as 5000 kg ones.
     let r = profile_case("size", 1);
@@ -498,9 +510,16 @@ fn the_combined_objective_is_the_mean_of_the_crps_and_the_group_w1() {
 
 #[test]
 fn profile_loop_adds_nothing_without_a_hidden_effect() {
-    for (design, seed) in
-        [("control_a", 1), ("control_a", 2), ("control_a", 3), ("control_b", 1), ("control_b", 2), ("control_b", 3)]
-    {
+    for (design, seed) in [
+        ("control_a", 1),
+        ("control_a", 2),
+        ("control_a", 3),
+        ("control_b", 1),
+        ("control_b", 2),
+        ("control_b", 3),
+        ("control_a_tracked", 1),
+        ("control_a_tracked", 2),
+    ] {
         let r = profile_case(design, seed);
         assert!(r.effects_added.is_empty(), "{design} seed {seed}: {:#?}", r.effects_tried);
         assert!(r.final_stage.holdout.runout_mae_m.is_finite());

@@ -326,6 +326,10 @@ pub struct CalibrationConfig {
     pub release_attempts: usize,
     /// What the population fit minimises (default `crps`).
     pub objective: Objective,
+    /// Metres of run-out one metre of rebound height counts for in the score of a tracked run
+    /// ([`super::objective::score`]); default: the ratio of the observed spreads on the calibration runs
+    /// ([`super::objective::default_rebound_weight`]), 0 without tracked paths.
+    pub rebound_weight: Option<f64>,
     /// Most objective evaluations of the population fit (default 60 for 3DRB, 300 for 2DLM).
     pub max_evaluations: Option<usize>,
     /// Threads (default 0: all cores). Results do not depend on it.
@@ -361,6 +365,7 @@ impl Default for CalibrationConfig {
             fold_link_m: None,
             release_attempts: 1,
             objective: Objective::default(),
+            rebound_weight: None,
             max_evaluations: None,
             threads: 0,
             materials: BTreeMap::new(),
@@ -531,6 +536,13 @@ impl CalibrationConfig {
         }
         if !(self.group_link_m.is_finite() && self.group_link_m >= 0.0) {
             return Err(Error::invalid(f("group_link_m"), "must be a non-negative distance", "use for example 20"));
+        }
+        if self.rebound_weight.is_some_and(|w| !(w.is_finite() && w >= 0.0)) {
+            return Err(Error::invalid(
+                f("rebound_weight"),
+                "must be a non-negative number",
+                "leave it out (the ratio of observed spreads) or use 0 to score run-outs only",
+            ));
         }
         if self.max_evaluations.is_some_and(|n| n < 5) {
             return Err(Error::invalid(f("max_evaluations"), "must be at least 5", "use for example 60"));
@@ -751,6 +763,13 @@ mod tests {
         assert_eq!(CalibrationConfig::from_toml_str("repeats = 30\n", "c.toml").unwrap().screen_repeats(), 30);
         let e = CalibrationConfig::from_toml_str("[effects]\nscreen_repeats = 21\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: effects.screen_repeats") && e.contains("got 21"), "{e}");
+        assert_eq!(cfg.rebound_weight, None);
+        assert_eq!(
+            CalibrationConfig::from_toml_str("rebound_weight = 0\n", "c.toml").unwrap().rebound_weight,
+            Some(0.0)
+        );
+        let e = CalibrationConfig::from_toml_str("rebound_weight = -1\n", "c.toml").unwrap_err().to_string();
+        assert!(e.contains("c.toml: rebound_weight") && e.contains("non-negative"), "{e}");
         let e = cfg.check_materials(ModelKind::Rigid3d, &["rock".into()], "c.toml").unwrap_err().to_string();
         assert!(e.contains("materials.default"), "{e}");
     }

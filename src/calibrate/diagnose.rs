@@ -2,7 +2,9 @@
 //! rank correlation with permutation p-values.
 //!
 //! Residuals are `observed − median simulated run-out` (negative: the model runs too far) and the rest-point
-//! offset (distance from the observed rest point to the median simulated one). Covariates come only from the
+//! offset (distance from the observed rest point to the median simulated one), and on a tracked campaign the
+//! rebound residual `observed − median simulated rebound height` ([`super::rebound`]) of the tracked runs.
+//! Covariates come only from the
 //! release and the simulations, never from the observed outcome, so that no covariate correlates with a residual
 //! by construction.
 
@@ -17,7 +19,8 @@ use serde::{Deserialize, Serialize};
 pub struct Diagnostic {
     /// Covariate name.
     pub covariate: String,
-    /// `runout` (observed − median simulated run-out) or `endpoint_offset`.
+    /// `runout` (observed − median simulated run-out), `endpoint_offset` or `rebound` (observed − median
+    /// simulated rebound height, tracked runs only).
     pub residual: String,
     /// Spearman's rank correlation.
     pub spearman_rho: f64,
@@ -118,9 +121,14 @@ pub fn covariates(model: &dyn Model, sims: &[RunSims]) -> Covariates {
 
 /// Stream index base of the diagnosis permutations.
 const DIAG_STREAM: u64 = u64::MAX - 2000;
+/// Stream index base of the rebound residual's permutations.
+const REBOUND_STREAM: u64 = u64::MAX - 2500;
+/// Fewest tracked runs for the rebound residual to be diagnosed.
+const MIN_TRACKED: usize = 6;
 
-/// Spearman correlations of both residuals with every covariate, with `permutations` permutations each (seeded).
-/// Sorted by p-value, then by |ρ| descending.
+/// Spearman correlations of the residuals with every covariate, with `permutations` permutations each (seeded):
+/// run-out and rest-point offset on every run, rebound on the tracked runs (if at least six). Sorted by p-value,
+/// then by |ρ| descending.
 pub fn diagnose(model: &dyn Model, sims: &[RunSims], permutations: usize, seed: u64) -> (Covariates, Vec<Diagnostic>) {
     let cov = covariates(model, sims);
     let (runout, offset) = residuals(model, sims);
@@ -132,6 +140,29 @@ pub fn diagnose(model: &dyn Model, sims: &[RunSims], permutations: usize, seed: 
             out.push(Diagnostic {
                 covariate: name.clone(),
                 residual: label.to_string(),
+                spearman_rho: rho,
+                p_value: p,
+                n: x.len(),
+            });
+        }
+    }
+    let runs = model.runs();
+    let tracked: Vec<usize> = (0..sims.len()).filter(|&i| runs[sims[i].run].rebound_height_m.is_some()).collect();
+    if tracked.len() >= MIN_TRACKED {
+        let residual: Vec<f64> = tracked
+            .iter()
+            .map(|&i| {
+                let s = &sims[i];
+                runs[s.run].rebound_height_m.unwrap_or(0.0) - s.median_of(|x| x.summary.rebound_height_m)
+            })
+            .collect();
+        for (k, (name, x)) in cov.names.iter().zip(&cov.values).enumerate() {
+            let x: Vec<f64> = tracked.iter().map(|&i| x[i]).collect();
+            let mut rng = stream(seed, REBOUND_STREAM - k as u64);
+            let (rho, p) = spearman_permutation(&x, &residual, permutations, &mut rng);
+            out.push(Diagnostic {
+                covariate: name.clone(),
+                residual: "rebound".to_string(),
                 spearman_rho: rho,
                 p_value: p,
                 n: x.len(),

@@ -28,7 +28,7 @@
 
 use super::config::CalibrationConfig;
 use super::model::{evaluate, Model, RunSims};
-use super::objective::objective;
+use super::objective::score;
 use super::params::{Candidate, FreeParam};
 use super::search::{nelder_mead, SearchResult};
 use super::stats::shuffle;
@@ -71,7 +71,7 @@ impl<'a> Context<'a> {
 
     fn objective_seeded(&self, c: &Candidate, which: &[usize], repeats: usize, seed: u64) -> f64 {
         match self.sims_seeded(c, which, repeats, seed) {
-            Ok(s) => objective(self.cfg.objective, self.model.runs(), &s),
+            Ok(s) => score(self.cfg, self.model.runs(), &s),
             Err(_) => f64::INFINITY,
         }
     }

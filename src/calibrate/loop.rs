@@ -41,9 +41,8 @@ use super::effects::{
     ZONE_DRAG_GRID, ZONE_MOBILITY_GRID,
 };
 use super::fit::{fit, Context};
-use super::metrics::crps;
 use super::model::{Model, RunSims, Sim};
-use super::objective::{objective, objective_of};
+use super::objective::{run_score, score, score_of};
 use super::params::{
     apply_mobility_2d, apply_mobility_3d, fold_mobility, friction_over, Candidate, EffectSpec, FreeParam, Region,
     MOBILITY,
@@ -230,15 +229,15 @@ pub fn effects_loop(
                 arm
             };
             let (e1_grid, chosen) = cross_validate(ctx, cal, &fold_of, &arm.settings, &arm.fold_settings);
-            let score = |e: &[CvError]| mean(&e.iter().map(|x| x.crps_m).collect::<Vec<_>>());
+            let mean_score = |e: &[CvError]| mean(&e.iter().map(|x| x.crps_m).collect::<Vec<_>>());
             let mae = |e: &[CvError]| mean(&e.iter().map(|x| x.abs_m).collect::<Vec<_>>());
-            let grid_before = score(&e0_grid);
-            let grid_after = score(&e1_grid);
+            let grid_before = mean_score(&e0_grid);
+            let grid_after = mean_score(&e1_grid);
             // The setting that is best on all calibration runs starts the final refit.
             let full = arm
                 .full
                 .iter()
-                .map(|&s| (objective(cfg.objective, model.runs(), &arm.settings[s]), s))
+                .map(|&s| (score(cfg, model.runs(), &arm.settings[s]), s))
                 .min_by(|a, b| a.0.total_cmp(&b.0))
                 .map(|(_, s)| arm.cands[s].clone())
                 .unwrap_or_else(|| current.clone());
@@ -276,7 +275,7 @@ pub fn effects_loop(
             } else {
                 (e0_grid.clone(), e1_grid.clone())
             };
-            let (mb, ma) = (score(&before), score(&after));
+            let (mb, ma) = (mean_score(&before), mean_score(&after));
             let diffs: Vec<f64> = before.iter().zip(&after).map(|(a, b)| a.crps_m - b.crps_m).collect();
             let mut rng = stream(cfg.seed, u64::MAX - 4000 - round as u64);
             let p = paired_sign_flip_p(&diffs, cfg.effects.permutations, &mut rng);
@@ -452,7 +451,7 @@ fn refit_cv(
         let sims = ctx.sims(&c, &test, ctx.cfg.repeats)?;
         for (j, s) in test_pos.iter().zip(&sims) {
             errors[*j] = CvError {
-                crps_m: crps(&s.runouts(), runs[s.run].runout_m),
+                crps_m: run_score(ctx.cfg.rebound_weight.unwrap_or(0.0), &runs[s.run], s),
                 abs_m: (s.median_runout() - runs[s.run].runout_m).abs(),
             };
         }
@@ -472,7 +471,8 @@ fn propose(
 ) -> Vec<Proposal> {
     let cfg = ctx.cfg;
     let alpha = cfg.effects.propose_alpha;
-    let runout: Vec<&Diagnostic> = diags.iter().filter(|d| d.residual == "runout").collect();
+    // Run-out residuals, and on a tracked campaign the rebound residuals: both carry an effect's signature.
+    let runout: Vec<&Diagnostic> = diags.iter().filter(|d| d.residual == "runout" || d.residual == "rebound").collect();
     let mut props = Vec::new();
     for def in allowed {
         match def.kind {
@@ -503,6 +503,9 @@ fn propose(
                 }
                 for d in runout.iter().filter(|d| d.covariate.starts_with("path_fraction_") && d.p_value <= alpha) {
                     let m = d.covariate.trim_start_matches("path_fraction_").to_string();
+                    if props.iter().any(|p: &Proposal| p.material.as_ref() == Some(&m)) {
+                        continue; // both residuals point at the material: one proposal
+                    }
                     props.push(Proposal {
                         def,
                         label: format!("soft_drag_{m}"),
@@ -564,16 +567,14 @@ fn cross_validate(
         let train: Vec<usize> = (0..cal.len()).filter(|&j| fold_of[j] != f).collect();
         let scored: Vec<(usize, f64)> = fold_settings[f]
             .iter()
-            .map(|&s| {
-                (s, objective_of(ctx.cfg.objective, runs, &train.iter().map(|&j| &settings[s][j]).collect::<Vec<_>>()))
-            })
+            .map(|&s| (s, score_of(ctx.cfg, runs, &train.iter().map(|&j| &settings[s][j]).collect::<Vec<_>>())))
             .collect();
         let best = scored.iter().min_by(|a, b| a.1.total_cmp(&b.1)).map(|x| x.0).unwrap_or(0);
         chosen[f] = best;
         for j in (0..cal.len()).filter(|&j| fold_of[j] == f) {
             let s = &settings[best][j];
             errors[j] = CvError {
-                crps_m: crps(&s.runouts(), runs[s.run].runout_m),
+                crps_m: run_score(ctx.cfg.rebound_weight.unwrap_or(0.0), &runs[s.run], s),
                 abs_m: (s.median_runout() - runs[s.run].runout_m).abs(),
             };
         }
@@ -584,7 +585,8 @@ fn cross_validate(
 /// One run's out-of-fold errors.
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct CvError {
-    /// CRPS of the simulated run-outs, m.
+    /// CRPS of the simulated run-outs, plus the weighted CRPS of the rebound heights of a tracked run
+    /// ([`run_score`]), m.
     crps_m: f64,
     /// |median simulated − observed run-out|, m.
     abs_m: f64,

@@ -9,12 +9,16 @@
 //! - `coverage_90` = share of runs whose observed run-out lies within the 5th–95th percentiles of its simulations;
 //! - `runout_bias_m` = mean simulated run-out − mean observed run-out.
 //!
+//! On the runs with a tracked path (none: the two are absent), the rebound height ([`super::rebound`]):
+//! `rebound_mae_m` = mean |median simulated − observed rebound height| and `rebound_crps_m` its mean CRPS.
+//!
 //! **Scatter floor**: the `runout_mae_m` a perfect model of each release group's median would reach:
 //! mean_i |obs_i − median of the observed run-outs of i's release group|, the median taken over all observed runs
 //! of the group in the campaign (ours: a held-out set holds too few runs per group for its own median; the floor
 //! is only a yardstick and chooses nothing).
 
 use super::model::RunSims;
+use super::objective::rebound_crps;
 use super::runs::FieldRun;
 use super::stats::{mean, median, wasserstein1};
 use serde::{Deserialize, Serialize};
@@ -45,6 +49,12 @@ pub struct Metrics {
     pub simulated_mean_m: f64,
     /// Share of simulations that did not come to rest (left the terrain or hit a time limit).
     pub not_stopped_fraction: f64,
+    /// Mean |median simulated − observed rebound height| over the tracked runs, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rebound_mae_m: Option<f64>,
+    /// Mean CRPS of the rebound heights over the tracked runs, m.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rebound_crps_m: Option<f64>,
 }
 
 impl Metrics {
@@ -87,7 +97,15 @@ pub fn metrics(runs: &[FieldRun], sims: &[RunSims]) -> Metrics {
         not_stopped += s.sims.iter().filter(|x| !x.stopped).count();
     }
     let which: Vec<usize> = sims.iter().map(|s| s.run).collect();
+    let tracked: Vec<&RunSims> = sims.iter().filter(|s| runs[s.run].rebound_height_m.is_some()).collect();
+    let over_tracked = |f: &dyn Fn(&RunSims) -> f64| {
+        (!tracked.is_empty()).then(|| mean(&tracked.iter().map(|s| f(s)).collect::<Vec<_>>()))
+    };
     Metrics {
+        rebound_mae_m: over_tracked(&|s| {
+            (s.median_of(|x| x.summary.rebound_height_m) - runs[s.run].rebound_height_m.unwrap_or(0.0)).abs()
+        }),
+        rebound_crps_m: over_tracked(&|s| rebound_crps(&runs[s.run], s).unwrap_or(0.0)),
         runout_mae_m: mean(&abs_err),
         runout_w1_m: wasserstein1(&obs, &all),
         endpoint_mae_m: mean(&end_err),
@@ -206,6 +224,7 @@ pub(crate) mod tests {
             rest_m: [obs, 0.0, 0.0],
             runout_m: obs,
             group,
+            rebound_height_m: None,
         }
     }
 

@@ -29,6 +29,7 @@ pub mod model2d;
 pub mod model3d;
 pub mod objective;
 pub mod params;
+pub mod rebound;
 pub mod report;
 pub mod runs;
 pub mod scenario_file;
@@ -64,7 +65,7 @@ pub fn open_model(
     let (runs, groups) = runs::field_runs(&campaign, cfg.group_link_m)?;
     let model: Box<dyn Model> = match kind {
         ModelKind::Rigid3d => Box::new(model3d::Model3d::new(&campaign, runs, groups, terrain_file, cfg, source)?),
-        ModelKind::Lumped2d => Box::new(model2d::Model2d::new(&campaign.dir, runs, groups, terrain_file, cfg)?),
+        ModelKind::Lumped2d => Box::new(model2d::Model2d::new(&campaign, runs, groups, terrain_file, cfg)?),
     };
     cfg.check_materials(kind, model.materials(), source)?;
     cfg.check_effects(kind, source)?;
@@ -134,6 +135,18 @@ pub fn calibrate(
     // A library caller may not have come through `open_model`: an effect name it cannot use is an error here too.
     cfg.check_effects(model.kind(), "calibration settings")?;
     let t0 = Instant::now();
+    let mut cfg = cfg.clone();
+    if cfg.rebound_weight.is_none() {
+        cfg.rebound_weight = objective::default_rebound_weight(model.runs(), cal);
+    }
+    let tracked = cal.iter().filter(|&&i| model.runs()[i].rebound_height_m.is_some()).count();
+    if tracked > 0 {
+        log(&format!(
+            "{tracked} calibration runs were tracked: each one's rebound-height CRPS counts {:.1} m of run-out",
+            cfg.rebound_weight.unwrap_or(0.0)
+        ));
+    }
+    let cfg = &cfg;
     let ctx = Context::new(model, cfg, log);
     let runs = model.runs();
     let (start, free) = base_candidate(model, cfg);

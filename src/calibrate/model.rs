@@ -31,6 +31,8 @@ pub struct PathSummary {
     pub impact_angle_mean_deg: f64,
     /// Number of impacts.
     pub impacts: u32,
+    /// Rebound height of the centre of mass ([`super::rebound`]), m.
+    pub rebound_height_m: f64,
     /// Share of the horizontal path over each material of the model (declared materials first, then zones).
     pub material_fraction: Vec<f64>,
 }

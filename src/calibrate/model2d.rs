@@ -6,8 +6,10 @@ use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
+use super::rebound::{rebound_height_m, Rebound};
 use super::runs::FieldRun;
 use super::scenario_file;
+use crate::campaign::Campaign;
 use crate::error::{Error, Result};
 use crate::lumped2d::{
     simulate_rock, FlightPiece, FrictionAngle, ImpactEvent, Material2d, Options2d, PathObserver, Profile, RockStart2d,
@@ -30,9 +32,9 @@ pub struct Model2d {
 }
 
 impl Model2d {
-    /// Reads the profile and binds the runs to it.
+    /// Reads the profile and binds the runs of `campaign` to it.
     pub fn new(
-        campaign: &Path,
+        campaign: &Campaign,
         runs: Vec<FieldRun>,
         group_names: Vec<String>,
         profile_file: &Path,
@@ -41,7 +43,16 @@ impl Model2d {
         let profile = Profile::from_csv_path(profile_file)?;
         let mut model = Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
             .with_release_attempts(cfg.release_attempts);
-        model.files = Some((campaign.to_path_buf(), profile_file.to_path_buf()));
+        model.files = Some((campaign.dir.clone(), profile_file.to_path_buf()));
+        // The observed rebound of each tracked run, above the same profile as the simulated ones.
+        for r in model.runs.iter_mut() {
+            if let Some(track) = campaign.tracks.get(&r.id) {
+                let profile = &model.profile;
+                let heights =
+                    track.iter().map(|q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z));
+                r.rebound_height_m = Some(rebound_height_m(heights));
+            }
+        }
         Ok(model)
     }
 
@@ -274,6 +285,7 @@ impl Prepared for Prepared2d<'_> {
         let mut obs = PathObserver2d::new(profile);
         let r = simulate_rock(&self.slope, &start, &self.options, &mut rng, &mut obs);
         let mut summary = obs.summary;
+        summary.rebound_height_m = obs.rebound.height_m();
         let total: f64 = summary.material_fraction.iter().sum();
         if total > 0.0 {
             summary.slope_mean_deg /= total;
@@ -312,13 +324,14 @@ struct PathObserver2d<'a> {
     profile: &'a Profile,
     summary: PathSummary,
     thinner: PathThinner,
+    rebound: Rebound,
 }
 
 impl<'a> PathObserver2d<'a> {
     fn new(profile: &'a Profile) -> Self {
         let summary =
             PathSummary { material_fraction: vec![0.0; profile.material_names().len()], ..Default::default() };
-        PathObserver2d { profile, summary, thinner: PathThinner::default() }
+        PathObserver2d { profile, summary, thinner: PathThinner::default(), rebound: Rebound::default() }
     }
 
     /// Adds a horizontal stretch [x0, x1] of the path.
@@ -355,11 +368,18 @@ impl PathObserver for PathObserver2d<'_> {
     fn flight(&mut self, piece: &FlightPiece) {
         let e = piece.end_position();
         self.stretch(piece.x0_m, e[0]);
+        // The flight every 0.05 s and at its end (its apex is missed by at most g·0.025²/2 ≈ 3 mm).
+        let steps = (piece.duration_s / 0.05).ceil().max(1.0) as usize;
+        for i in 0..=steps {
+            let [x, z] = piece.position_at(piece.duration_s * i as f64 / steps as f64);
+            self.rebound.offer(self.profile.z_at(x).map_or(f64::NAN, |g| z - g));
+        }
     }
 
     fn slide(&mut self, piece: &SlidePiece) {
         let e = piece.end_position();
         self.stretch(piece.x0_m, e[0]);
+        self.rebound.offer(0.0);
     }
 
     fn impact(&mut self, ev: &ImpactEvent) {
@@ -386,6 +406,44 @@ mod tests {
     use crate::calibrate::synthetic::{synthetic_2d, truth_2d, write_profile_campaign, Synthetic2d};
     use crate::lumped2d::ProfileScenario;
 
+    /// A lumped mass dropped 10 m onto level ground with Rn 0.5 rebounds to Rn² · 10 = 2.5 m, and a tracked path
+    /// read from `observed_trajectories.csv` gives its run the rebound of the same definition over the same profile.
+    #[test]
+    fn rebound_heights_of_a_drop_and_of_a_tracked_path() {
+        use crate::calibrate::synthetic::{material_params_2d, synthetic_profile};
+        let profile = synthetic_profile(&[(1000.0, 0.0)]).unwrap();
+        let ground = profile.z_at(50.0).unwrap();
+        let mut run = crate::calibrate::metrics::tests::run(0, 0, 1.0);
+        run.release_m = [50.0, 0.0, ground + 10.0];
+        run.rest_m = [51.0, 0.0, ground];
+        let model = Model2d::from_parts(vec![run.clone()], vec!["g".into()], profile, Options2d::default()).unwrap();
+        let c =
+            Candidate { params: material_params_2d("ground", [0.5, 0.0, 0.8, 0.0, 30.0, 0.0]), effects: Vec::new() };
+        let sim = model.prepare(&c).unwrap().simulate(&run, 0, 1);
+        assert!((sim.summary.rebound_height_m - 2.5).abs() < 0.01, "{}", sim.summary.rebound_height_m);
+
+        let spec = Synthetic2d::default();
+        let dir = tempfile::tempdir().unwrap();
+        write_profile_campaign(&spec, dir.path()).unwrap();
+        let campaign = Campaign::read(dir.path()).unwrap();
+        let first = &campaign.releases[0];
+        let profile = synthetic_profile(&spec.profile).unwrap();
+        // Falls 0.5 m to the ground, rises 0.9 m, comes down to 0.3 m: rebound 0.9 m.
+        let mut track = String::from("trajectory_id,time_s,x_m,z_m\n");
+        for (k, h) in [0.5, 0.0, 0.9, 0.3, 0.3].iter().enumerate() {
+            let x = first.position_m[0] + k as f64;
+            track += &format!("{},{},{x},{}\n", first.trajectory_id, 0.1 * k as f64, profile.z_at(x).unwrap() + h);
+        }
+        std::fs::write(dir.path().join("observed_trajectories.csv"), track).unwrap();
+        let campaign = Campaign::read(dir.path()).unwrap();
+        let (runs, groups) = crate::calibrate::runs::field_runs(&campaign, 2.0).unwrap();
+        let cfg = CalibrationConfig::default();
+        let model = Model2d::new(&campaign, runs, groups, &dir.path().join("profile.csv"), &cfg).unwrap();
+        let observed: Vec<Option<f64>> = model.runs().iter().map(|r| r.rebound_height_m).collect();
+        assert!((observed[0].unwrap() - 0.9).abs() < 1e-9, "{observed:?}");
+        assert!(observed[1..].iter().all(Option::is_none), "{observed:?}");
+    }
+
     /// `calibrated_profile.toml` of a model with a zone the loop added and speed-dependent restitution: the zoned
     /// profile is written beside it, and read back as `talus profile` reads it, every segment has the calibrated
     /// material, the engine the calibrated options, and the rocks start as the field runs did, `repeats` each.
@@ -398,7 +456,8 @@ mod tests {
         write_profile_campaign(&spec, dir.path()).unwrap();
         let profile_file = dir.path().join("profile.csv");
         let (runs, groups) = (synth.runs().to_vec(), synth.group_names().to_vec());
-        let model = Model2d::new(dir.path(), runs, groups, &profile_file, &CalibrationConfig::default()).unwrap();
+        let campaign = Campaign::read(dir.path()).unwrap();
+        let model = Model2d::new(&campaign, runs, groups, &profile_file, &CalibrationConfig::default()).unwrap();
         let mut c = truth_2d(&spec);
         let effect = |kind, label: &str, region| EffectSpec { kind, label: label.into(), material: None, region };
         c.effects.push(effect(EffectKind::Zone, "zone1", Some(Region::Interval([10.0, 20.0]))));

@@ -6,6 +6,7 @@ use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
+use super::rebound::{rebound_height_m, Rebound};
 use super::runs::FieldRun;
 use super::scenario_file;
 use crate::campaign::Campaign;
@@ -105,6 +106,16 @@ impl Model3d {
         let mut model = Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)?
             .with_release_attempts(cfg.release_attempts);
         model.files = Some((campaign.dir.clone(), spec));
+        // The observed rebound of each tracked run, read on the same terrain as the simulated ones.
+        for k in 0..model.runs.len() {
+            if let Some(track) = campaign.tracks.get(&model.runs[k].id) {
+                let heights = track.iter().map(|q| {
+                    let p = model.local(q.position_m);
+                    model.terrain.surface.height(p.x, p.y).map_or(f64::NAN, |z| p.z - z)
+                });
+                model.runs[k].rebound_height_m = Some(rebound_height_m(heights));
+            }
+        }
         Ok(model)
     }
 
@@ -382,6 +393,7 @@ impl Prepared for Prepared3d<'_> {
         let o = terrain.origin;
         let path = obs.thinner.finish(end.x + o.x, end.y + o.y);
         let mut summary = obs.summary;
+        summary.rebound_height_m = obs.rebound.height_m();
         let total = summary.material_fraction.iter().sum::<f64>();
         if total > 0.0 {
             summary.slope_mean_deg /= total;
@@ -419,12 +431,13 @@ struct PathObserver3d<'a> {
     last: Option<Vector3<f64>>,
     summary: PathSummary,
     thinner: PathThinner,
+    rebound: Rebound,
 }
 
 impl<'a> PathObserver3d<'a> {
     fn new(terrain: &'a Terrain) -> Self {
         let summary = PathSummary { material_fraction: vec![0.0; terrain.materials.len()], ..Default::default() };
-        PathObserver3d { terrain, last: None, summary, thinner: PathThinner::default() }
+        PathObserver3d { terrain, last: None, summary, thinner: PathThinner::default(), rebound: Rebound::default() }
     }
 }
 
@@ -433,6 +446,7 @@ impl Observer for PathObserver3d<'_> {
         let x = s.position_m;
         let o = self.terrain.origin;
         self.thinner.offer(x.x + o.x, x.y + o.y, 1.0);
+        self.rebound.offer(self.terrain.surface.height(x.x, x.y).map_or(f64::NAN, |z| x.z - z));
         if let Some(last) = self.last {
             let step = (x.x - last.x).hypot(x.y - last.y);
             if step > 0.0 {

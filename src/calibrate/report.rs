@@ -528,6 +528,19 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             metrics_rows(&mut s, &format!("{name}, calibration, block {b}"), m);
         }
     }
+    if r.baseline.calibration.rebound_mae_m.is_some() {
+        let _ = writeln!(s, "\n### Rebound heights of the tracked runs\n");
+        let _ = writeln!(s, "The rebound height is the largest rise of the centre of mass above the ground over the lowest it had been (docs/calibration.md); each tracked run's rebound CRPS counts {} m of run-out in the score (`rebound_weight`).\n", fmt(r.settings.rebound_weight.unwrap_or(0.0)));
+        let _ = writeln!(s, "| model, runs | rebound_mae_m | rebound_crps_m |");
+        let _ = writeln!(s, "|---|---|---|");
+        for (name, st) in [("baseline", &r.baseline), ("final", &r.final_stage)] {
+            for (set, m) in [("held-out", &st.holdout), ("calibration", &st.calibration)] {
+                if let (Some(mae), Some(c)) = (m.rebound_mae_m, m.rebound_crps_m) {
+                    let _ = writeln!(s, "| {name}, {set} | {} | {} |", fmt(mae), fmt(c));
+                }
+            }
+        }
+    }
     let _ = writeln!(s, "\n## Parameters\n");
     let _ = writeln!(s, "| parameter | baseline | final |");
     let _ = writeln!(s, "|---|---|---|");

@@ -39,6 +39,8 @@ pub struct FieldRun {
     pub runout_m: f64,
     /// Release group index.
     pub group: usize,
+    /// Observed rebound height ([`super::rebound`]) from the run's tracked path, m; `None` without one.
+    pub rebound_height_m: Option<f64>,
 }
 
 impl FieldRun {
@@ -89,6 +91,7 @@ pub fn field_runs(campaign: &Campaign, group_link_m: f64) -> Result<(Vec<FieldRu
             rest_m: dep.position_m,
             runout_m: dep.runout_m,
             group: 0,
+            rebound_height_m: None,
         });
     }
     if runs.len() < 6 {

@@ -61,6 +61,10 @@ impl Hidden {
     }
 }
 
+/// Noise of the rebound heights of a tracked synthetic campaign (`CASE_tracked`), m (ours: about what tracking a
+/// block's centre from video or an embedded sensor achieves).
+pub const TRACK_NOISE_M: f64 = 0.1;
+
 /// Size of a synthetic 3DRB campaign.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Synthetic3d {
@@ -96,6 +100,9 @@ pub struct Synthetic3d {
     pub release_speeds_mps: Vec<[f64; 2]>,
     /// Block shape: `cube`, `flat_box`, `smartie`, or `boulder` (a rounded 32-vertex hull, see [`boulder`]).
     pub shape: String,
+    /// Tracked paths: each run's rebound height ([`super::rebound`]) is observed with this noise (sd, m); `None`
+    /// for a campaign of rest points only.
+    pub track_noise_m: Option<f64>,
 }
 
 /// A rounded boulder: the convex hull of 32 points spread evenly over a sphere (Fibonacci lattice). Its rolling is
@@ -133,6 +140,7 @@ impl Default for Synthetic3d {
             material: TRUE_3D,
             shape: "cube".into(),
             release_speeds_mps: vec![[0.5, 1.5]],
+            track_noise_m: None,
         }
     }
 }
@@ -185,6 +193,9 @@ pub const TRUE_3D: [f64; 4] = [0.35, 0.05, 40.0, 32.0];
 /// - `size` (and `control_b`): cubes dropped 0.5 to 20 m onto a 15° apron; `size` hides Cr' = Cr (m/150 kg)^0.4, so
 ///   the 20 kg blocks bounce less and the 1200 kg ones more.
 pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
+    if let Some(base) = name.strip_suffix("_tracked") {
+        return case_3d(base, seed).map(|s| Synthetic3d { track_noise_m: Some(TRACK_NOISE_M), ..s });
+    }
     let two_regime = Synthetic3d {
         seed,
         runs_per_group: 6,
@@ -278,6 +289,7 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
                     rest_m: [0.0; 3],
                     runout_m: 0.0,
                     group: 0,
+                    rebound_height_m: None,
                 });
             }
         }
@@ -287,7 +299,7 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
     let truth = truth_3d(spec);
     let truth_model =
         Model3d::from_parts(truth_runs, groups.clone(), terrain.clone(), bodies.clone(), sim.clone(), None)?;
-    observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m)?;
+    observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m, spec.track_noise_m)?;
     Model3d::from_parts(runs, groups, terrain, bodies, sim, None)
 }
 
@@ -365,6 +377,9 @@ pub fn bouncy_2d() -> Synthetic2d {
 /// Rn (m/500 kg)^0.3 and `zone` a soft patch at x 2–9 m (Rn 0.1, Rt 0.5, friction 55°) on [`steep_2d`];
 /// `control_a` and `control_b` are the two designs with nothing hidden.
 pub fn case_2d(name: &str, seed: u64) -> Option<Synthetic2d> {
+    if let Some(base) = name.strip_suffix("_tracked") {
+        return case_2d(base, seed).map(|s| Synthetic2d { track_noise_m: Some(TRACK_NOISE_M), ..s });
+    }
     let (design, hidden) = match name {
         "speed" => (bouncy_2d(), Hidden::SpeedRestitution(10.0)),
         "size" => (steep_2d(), Hidden::MassRestitution(-0.3)),
@@ -411,17 +426,29 @@ pub fn material_params_3d(name: &str, v: [f64; 4]) -> Params {
 
 /// Simulates each run once under `truth` from data streams (seed + 1000, never used by calibration), adds noise,
 /// and stores the rest points and run-outs in `runs`.
-fn observe(model: &dyn Model, truth: &Candidate, runs: &mut [FieldRun], seed: u64, noise_m: f64) -> Result<()> {
+/// Observes the runs under the true model: rest points with noise `noise_m`, and rebound heights with noise
+/// `track_noise_m` (clipped at 0) if the campaign is tracked.
+fn observe(
+    model: &dyn Model,
+    truth: &Candidate,
+    runs: &mut [FieldRun],
+    seed: u64,
+    noise_m: f64,
+    track_noise_m: Option<f64>,
+) -> Result<()> {
     let prepared: Box<dyn Prepared + '_> = model.prepare(truth)?;
     let data_seed = seed.wrapping_add(1000);
     let sims = crate::parallel::collect_in_order(runs.len(), 0, |i| prepared.simulate(&model.runs()[i], 0, data_seed));
     let mut rng = stream(seed, 11);
+    let mut track_rng = stream(seed, 12);
     let profile = model.kind() == super::config::ModelKind::Lumped2d;
     for (r, s) in runs.iter_mut().zip(sims) {
         let dx = noise_m * standard_normal(&mut rng);
         let dy = if profile { 0.0 } else { noise_m * standard_normal(&mut rng) };
         r.rest_m = [s.rest_m[0] + dx, s.rest_m[1] + dy, s.rest_m[2]];
         r.runout_m = (r.rest_m[0] - r.release_m[0]).hypot(r.rest_m[1] - r.release_m[1]);
+        r.rebound_height_m =
+            track_noise_m.map(|e| (s.summary.rebound_height_m + e * standard_normal(&mut track_rng)).max(0.0));
     }
     Ok(())
 }
@@ -446,6 +473,8 @@ pub struct Synthetic2d {
     pub releases: Vec<(f64, f64)>,
     /// The true material `[rn, rn_sd, rt, rt_sd, friction °, roughness °]` (default [`TRUE_2D`]).
     pub material: [f64; 6],
+    /// Tracked paths: rebound heights observed with this noise (sd, m); `None` for rest points only.
+    pub track_noise_m: Option<f64>,
 }
 
 impl Default for Synthetic2d {
@@ -459,6 +488,7 @@ impl Default for Synthetic2d {
             profile: vec![(30.0, 15.0), (1000.0, 0.0)],
             releases: vec![(3.0, 0.5), (6.0, 5.0), (9.0, 15.0)],
             material: TRUE_2D,
+            track_noise_m: None,
         }
     }
 }
@@ -513,6 +543,7 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
                     rest_m: [0.0; 3],
                     runout_m: 0.0,
                     group: 0,
+                    rebound_height_m: None,
                 });
             }
         }
@@ -520,7 +551,7 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
     let groups = assign_groups(&mut runs, 2.0);
     let truth = truth_2d(spec);
     let truth_model = Model2d::from_parts(runs.clone(), groups.clone(), profile.clone(), options.clone())?;
-    observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m)?;
+    observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m, spec.track_noise_m)?;
     Model2d::from_parts(runs, groups, profile, options)
 }
 

@@ -18,7 +18,8 @@ use talus::calibrate::{self, split, CalibrationConfig, ModelKind};
 ///       --config examples/tschamut_calibrate.toml --out outputs/tschamut_calibration
 #[derive(Debug, Args)]
 pub struct CalibrateArgs {
-    /// Campaign folder (release_points.csv, observed_deposition.csv, block_metadata.csv).
+    /// Campaign folder (release_points.csv, observed_deposition.csv, block_metadata.csv; optional
+    /// observed_trajectories.csv, tracked paths whose rebound heights are then fitted too).
     campaign: PathBuf,
     /// Terrain file (3drb: OBJ, STL, GeoTIFF or ESRI ASCII DEM) or profile CSV (2dlm).
     #[arg(long)]
