@@ -41,26 +41,36 @@ fn shipped_calibration_settings_files_read() {
     }
 }
 
-/// `examples/profile_campaign/` is what `write_profile_campaign` writes for the `2d_zone` case, seed 1.
+/// `examples/profile_campaign/` and `examples/profile_campaign_tracked/` are what `write_profile_campaign` writes
+/// for the `2d_zone` and `2d_speed_tracked` cases, seed 1.
 #[test]
-fn the_shipped_profile_campaign_is_what_its_command_writes() {
-    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign");
-    let dir = tempfile::tempdir().unwrap();
-    let spec = talus::calibrate::synthetic::case_2d("zone", 1).unwrap();
-    talus::calibrate::synthetic::write_profile_campaign(&spec, dir.path()).unwrap();
-    // Numbers to 1e-6 (relative), so that another libm's last bit does not fail it.
+fn the_shipped_profile_campaigns_are_what_their_command_writes() {
+    // Numbers to 1e-6 (relative; the tracks to their last written digit), so that another libm's last bit does not
+    // fail it.
     let same = |a: &str, b: &str| match (a.parse::<f64>(), b.parse::<f64>()) {
-        (Ok(x), Ok(y)) => (x - y).abs() <= 1e-6 * x.abs().max(1.0),
+        (Ok(x), Ok(y)) => (x - y).abs() <= 1e-6 * x.abs().max(1.0) || (x - y).abs() <= 1.001e-3,
         _ => a == b,
     };
-    for f in ["release_points.csv", "observed_deposition.csv", "block_metadata.csv", "profile.csv"] {
-        let (want, got) =
-            (std::fs::read_to_string(shipped.join(f)).unwrap(), std::fs::read_to_string(dir.path().join(f)).unwrap());
-        assert_eq!(want.lines().count(), got.lines().count(), "{f}");
-        for (l, (w, g)) in want.lines().zip(got.lines()).enumerate() {
-            let fields = |t: &str| t.split(',').map(str::to_string).collect::<Vec<_>>();
-            let (w, g) = (fields(w), fields(g));
-            assert!(w.len() == g.len() && w.iter().zip(&g).all(|(a, b)| same(a, b)), "{f}:{}: {w:?} vs {g:?}", l + 1);
+    for (folder, case, tracked) in
+        [("profile_campaign", "zone", false), ("profile_campaign_tracked", "speed_tracked", true)]
+    {
+        let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(folder);
+        let dir = tempfile::tempdir().unwrap();
+        let spec = talus::calibrate::synthetic::case_2d(case, 1).unwrap();
+        talus::calibrate::synthetic::write_profile_campaign(&spec, dir.path()).unwrap();
+        let mut files = vec!["release_points.csv", "observed_deposition.csv", "block_metadata.csv", "profile.csv"];
+        files.extend(tracked.then_some("observed_trajectories.csv"));
+        assert_eq!(dir.path().join("observed_trajectories.csv").exists(), tracked, "{folder}");
+        for f in files {
+            let read = |d: &std::path::Path| std::fs::read_to_string(d.join(f)).unwrap();
+            let (want, got) = (read(&shipped), read(dir.path()));
+            assert_eq!(want.lines().count(), got.lines().count(), "{folder}/{f}");
+            for (l, (w, g)) in want.lines().zip(got.lines()).enumerate() {
+                let fields = |t: &str| t.split(',').map(str::to_string).collect::<Vec<_>>();
+                let (w, g) = (fields(w), fields(g));
+                let ok = w.len() == g.len() && w.iter().zip(&g).all(|(a, b)| same(a, b));
+                assert!(ok, "{folder}/{f}:{}: {w:?} vs {g:?}", l + 1);
+            }
         }
     }
 }
@@ -634,6 +644,38 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     let o = run(&["--out", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("repeatz"));
+}
+
+#[test]
+fn command_line_reads_tracked_paths_and_reports_rebound_heights() {
+    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign_tracked");
+    let dir = tempfile::tempdir().unwrap();
+    let (settings, out) = (dir.path().join("settings.toml"), dir.path().join("out"));
+    std::fs::write(&settings, "max_evaluations = 20\n[back_analysis]\nenabled = false\n[effects]\nmax_rounds = 0\n")
+        .unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
+        .arg("calibrate")
+        .arg(&shipped)
+        .arg("--terrain")
+        .arg(shipped.join("profile.csv"))
+        .args(["--model", "2dlm", "--config"])
+        .arg(&settings)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("calibration runs were tracked"));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    for part in ["calibration", "holdout"] {
+        let mae = json["baseline"][part]["rebound_mae_m"].as_f64().unwrap();
+        assert!(mae > 0.0 && mae < 5.0, "{part}: rebound MAE {mae} m");
+        assert!(json["baseline"][part]["rebound_crps_m"].as_f64().is_some_and(|c| c > 0.0), "{part}");
+    }
+    assert!(json["settings"]["rebound_weight"].as_f64().is_some_and(|w| w > 1.0), "{}", json["settings"]);
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("### Rebound heights of the tracked runs"), "{md}");
 }
 
 #[test]

@@ -9,11 +9,11 @@ use super::params::{apply_mobility_2d, Candidate, Params, Region};
 use super::rebound::{rebound_height_m, Rebound};
 use super::runs::FieldRun;
 use super::scenario_file;
-use crate::campaign::Campaign;
+use crate::campaign::{Campaign, TrackPoint};
 use crate::error::{Error, Result};
 use crate::lumped2d::{
-    simulate_rock, FlightPiece, FrictionAngle, ImpactEvent, Material2d, Options2d, PathObserver, Profile, RockStart2d,
-    Rotation, SlidePiece, Slope2d, StopReason, PFEIFFER_BOWEN_MPS,
+    simulate_rock, FlightPiece, FrictionAngle, ImpactEvent, Material2d, Options2d, PathObserver, PathPiece,
+    PathRecorder, Profile, RockStart2d, Rotation, SlidePiece, Slope2d, StopReason, PFEIFFER_BOWEN_MPS,
 };
 use crate::random::{stream, TruncNormal};
 use std::path::{Path, PathBuf};
@@ -272,18 +272,9 @@ impl Model2d {
 impl Prepared for Prepared2d<'_> {
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
         let _ = self.model;
-        let mut rng = stream(seed, super::model::stream_index(run.index, repeat));
-        let start = RockStart2d {
-            x_m: run.release_m[0],
-            z_m: run.release_m[2],
-            vx_mps: run.velocity_mps[0],
-            vz_mps: run.velocity_mps[2],
-            spin_radps: run.spin_radps[1],
-            mass_kg: run.mass_kg,
-        };
         let profile = self.slope.profile();
         let mut obs = PathObserver2d::new(profile);
-        let r = simulate_rock(&self.slope, &start, &self.options, &mut rng, &mut obs);
+        let r = simulate_run(&self.slope, &self.options, run, repeat, seed, &mut obs);
         let mut summary = obs.summary;
         summary.rebound_height_m = obs.rebound.height_m();
         let total: f64 = summary.material_fraction.iter().sum();
@@ -308,6 +299,61 @@ impl Prepared for Prepared2d<'_> {
             summary,
             path,
         }
+    }
+}
+
+/// Simulates `run` from its measured release state, with the random stream of its `repeat` under `seed`.
+fn simulate_run(
+    slope: &Slope2d,
+    options: &Options2d,
+    run: &FieldRun,
+    repeat: usize,
+    seed: u64,
+    obs: &mut impl PathObserver,
+) -> crate::lumped2d::RockResult2d {
+    let mut rng = stream(seed, super::model::stream_index(run.index, repeat));
+    let start = RockStart2d {
+        x_m: run.release_m[0],
+        z_m: run.release_m[2],
+        vx_mps: run.velocity_mps[0],
+        vz_mps: run.velocity_mps[2],
+        spin_radps: run.spin_radps[1],
+        mass_kg: run.mass_kg,
+    };
+    simulate_rock(slope, &start, options, &mut rng, obs)
+}
+
+impl Model2d {
+    /// The path of `run` under `candidate` (the same path as its simulation with `repeat` and `seed`), as a tracked
+    /// path of `observed_trajectories.csv` gives it: the centre every 0.05 s of each flight and at both ends of each
+    /// slide. Synthetic campaigns written to disk use it.
+    ///
+    /// # Errors
+    /// The candidate does not fit the model.
+    pub fn track(&self, candidate: &Candidate, run: &FieldRun, repeat: usize, seed: u64) -> Result<Vec<TrackPoint>> {
+        let (profile, mats, options, _) = self.realize(candidate)?;
+        let slope = Slope2d::new(profile, mats)?;
+        let mut rec = PathRecorder::default();
+        simulate_run(&slope, &options, run, repeat, seed, &mut rec);
+        let mut track: Vec<TrackPoint> = Vec::new();
+        for piece in &rec.pieces {
+            let samples: Vec<(f64, [f64; 2])> = match piece {
+                PathPiece::Flight(f) => {
+                    let steps = (f.duration_s / 0.05).ceil().max(1.0) as usize;
+                    let dt_s = |i: usize| f.duration_s * i as f64 / steps as f64;
+                    (0..=steps).map(|i| (f.t0_s + dt_s(i), f.position_at(dt_s(i)))).collect()
+                }
+                PathPiece::Slide(s) => vec![(s.t0_s, s.position_at(0.0)), (s.t0_s + s.duration_s, s.end_position())],
+                PathPiece::Impact(_) => Vec::new(),
+            };
+            // Pieces meet end to start: keep the time strictly increasing.
+            for (time_s, [x, z]) in samples {
+                if track.last().is_none_or(|q| time_s > q.time_s) {
+                    track.push(TrackPoint { time_s, position_m: [x, 0.0, z] });
+                }
+            }
+        }
+        Ok(track)
     }
 }
 

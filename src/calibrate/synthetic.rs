@@ -437,8 +437,8 @@ fn observe(
     track_noise_m: Option<f64>,
 ) -> Result<()> {
     let prepared: Box<dyn Prepared + '_> = model.prepare(truth)?;
-    let data_seed = seed.wrapping_add(1000);
-    let sims = crate::parallel::collect_in_order(runs.len(), 0, |i| prepared.simulate(&model.runs()[i], 0, data_seed));
+    let sims =
+        crate::parallel::collect_in_order(runs.len(), 0, |i| prepared.simulate(&model.runs()[i], 0, data_seed(seed)));
     let mut rng = stream(seed, 11);
     let mut track_rng = stream(seed, 12);
     let profile = model.kind() == super::config::ModelKind::Lumped2d;
@@ -557,7 +557,9 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
 
 /// Writes the synthetic 2DLM campaign of `spec` into the folder `dir` as a user's field campaign would be: the
 /// campaign CSVs (`release_points.csv`, `observed_deposition.csv`, `block_metadata.csv`) and the profile as
-/// `profile.csv`, ready for `talus calibrate DIR --terrain DIR/profile.csv --model 2dlm`.
+/// `profile.csv`, ready for `talus calibrate DIR --terrain DIR/profile.csv --model 2dlm`. A tracked case also gets
+/// `observed_trajectories.csv`: each run's true path ([`Model2d::track`]) to 1 mm, without tracking noise (the
+/// campaign in memory adds `track_noise_m` to each rebound height instead).
 ///
 /// # Errors
 /// The campaign cannot be simulated, or a file cannot be written.
@@ -583,7 +585,28 @@ pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path) -> Result<()> {
     {
         crate::io::write_bytes_atomic(&dir.join(name), text.as_bytes())?;
     }
+    if spec.track_noise_m.is_some() {
+        let truth = truth_2d(spec);
+        let mut csv = String::from("trajectory_id,time_s,x_m,z_m\n");
+        for r in model.runs() {
+            let mut last_ms = -1.0;
+            for p in model.track(&truth, r, 0, data_seed(spec.seed))? {
+                // Written to the millisecond: a point closer in time to the last one written is left out.
+                let ms = (p.time_s * 1000.0).round();
+                if ms > last_ms {
+                    csv += &format!("{},{:.3},{:.3},{:.3}\n", r.id, ms / 1000.0, p.position_m[0], p.position_m[2]);
+                    last_ms = ms;
+                }
+            }
+        }
+        crate::io::write_bytes_atomic(&dir.join("observed_trajectories.csv"), csv.as_bytes())?;
+    }
     synthetic_profile(&spec.profile)?.write_csv(&dir.join("profile.csv"))
+}
+
+/// Seed of the true simulations of a synthetic campaign of seed `seed` (apart from the calibration's own seeds).
+fn data_seed(seed: u64) -> u64 {
+    seed.wrapping_add(1000)
 }
 
 /// Share of `polygon`'s area that lies inside `truth` (estimated on a 40 × 40 lattice over the polygon's bounding
@@ -617,6 +640,30 @@ pub fn zone_overlap(polygon: &[[f64; 2]], truth: &[[f64; 2]]) -> (f64, bool) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn written_tracks_give_back_the_rebounds_of_the_true_paths() {
+        // The tracked paths `write_profile_campaign` writes, read back as a user's file, rebound as the true model's
+        // simulations of the same runs did (to the millimetres the file keeps).
+        let spec = Synthetic2d { runs_per_group: 2, ..case_2d("speed_tracked", 1).unwrap() };
+        let dir = tempfile::tempdir().unwrap();
+        write_profile_campaign(&spec, dir.path()).unwrap();
+        let campaign = crate::campaign::Campaign::read(dir.path()).unwrap();
+        assert_eq!(campaign.tracks.len(), campaign.releases.len());
+        let (runs, groups) = super::super::runs::field_runs(&campaign, 2.0).unwrap();
+        let cfg = super::super::config::CalibrationConfig::default();
+        let read = Model2d::new(&campaign, runs, groups, &dir.path().join("profile.csv"), &cfg).unwrap();
+        let truth = synthetic_2d(&spec, Options2d::default()).unwrap();
+        let prepared = truth.prepare(&truth_2d(&spec)).unwrap();
+        let mut bounced = 0;
+        for (file_run, run) in read.runs().iter().zip(truth.runs()) {
+            let simulated = prepared.simulate(run, 0, data_seed(spec.seed)).summary.rebound_height_m;
+            let observed = file_run.rebound_height_m.unwrap();
+            assert!((observed - simulated).abs() < 0.005, "{}: {observed:.3} against {simulated:.3} m", run.id);
+            bounced += usize::from(simulated > 0.5);
+        }
+        assert!(bounced > 5, "only {bounced} runs rebound more than 0.5 m");
+    }
 
     #[test]
     fn simulated_rebounds_on_level_ground_stay_below_the_drop_and_near_cr_squared() {
