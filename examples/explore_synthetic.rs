@@ -5,8 +5,8 @@
 //!
 //! Run: cargo run --release --example explore_synthetic [-- NAME ...]   (2d_control_a 2d_control_b 2d_speed_steep
 //! 2d_speed 2d_size 2d_zone speed speed_mixed size zone control_a control_b control_c control_d 3d_designs;
-//! mixed_designs [rivals] [DESIGN ...]; tracks [speed speed_mixed thrown3]; crps_noise; default: all but
-//! 3d_designs, mixed_designs, tracks and crps_noise; the 3DRB ones take about a minute each on 2 cores, 3d_designs
+//! mixed_designs [rivals] [DESIGN ...]; tracks [speed speed_mixed thrown3]; crps_noise; track_noise; default: all
+//! but 3d_designs, mixed_designs, tracks, crps_noise and track_noise; the 3DRB ones take about a minute each on 2 cores, 3d_designs
 //! 15 minutes, mixed_designs 7 minutes, tracks 4 minutes a design)
 use talus::calibrate::config::Objective;
 use talus::calibrate::effects::{EffectKind, MOBILITY_GRID};
@@ -190,6 +190,40 @@ fn report_2d(name: &str, spec: &Synthetic2d) {
 /// default seeded split) of its baseline fit (seed 1: Cr 0.43, friction 38.4°/29.2°) at each mobility factor of the
 /// screening, with 4 repeats per run (the screening's default until stop 26, `search_repeats`) and with 20 (its default
 /// since), on four seeds.
+/// How tracking noise on each point of a path raises its rebound height (the rise over the lowest point before it
+/// picks up the noise's extremes): the tracks of `examples/profile_campaign_tracked` (exact), with Gaussian noise on
+/// every height, against the exact ones.
+fn track_noise() {
+    use talus::calibrate::rebound::rebound_height_m;
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign_tracked");
+    let campaign = talus::campaign::Campaign::read(&dir).unwrap();
+    let profile = talus::lumped2d::Profile::from_csv_path(&dir.join("profile.csv")).unwrap();
+    let heights = |track: &[talus::campaign::TrackPoint]| -> Vec<f64> {
+        track.iter().map(|p| p.position_m[2] - profile.z_at(p.position_m[0]).unwrap()).collect()
+    };
+    for sd_m in [0.02, 0.05, 0.1, 0.2] {
+        let mut rng = talus::random::stream(1, 0);
+        let mut raised: Vec<f64> = campaign
+            .tracks
+            .values()
+            .map(|track| {
+                let h = heights(track);
+                let noisy = h.iter().map(|v| v + sd_m * talus::random::standard_normal(&mut rng));
+                rebound_height_m(noisy) - rebound_height_m(h.iter().copied())
+            })
+            .collect();
+        raised.sort_by(f64::total_cmp);
+        let points: usize = campaign.tracks.values().map(Vec::len).sum();
+        println!(
+            "track noise sd {sd_m:.2} m: rebound raised by median {:.3} m, max {:.3} m ({} tracks, {:.0} points each)",
+            raised[raised.len() / 2],
+            raised[raised.len() - 1],
+            raised.len(),
+            points as f64 / raised.len() as f64
+        );
+    }
+}
+
 fn crps_noise() {
     let model = synthetic_3d(&case_3d("speed", 1).unwrap(), SimParams::default()).unwrap();
     let cfg = CalibrationConfig::default();
@@ -362,6 +396,9 @@ fn main() {
     }
     if args.iter().any(|a| a == "crps_noise") {
         crps_noise();
+    }
+    if args.iter().any(|a| a == "track_noise") {
+        track_noise();
     }
     for name in ["speed", "speed_mixed", "size", "zone", "control_a", "control_b", "control_c", "control_d"] {
         if want(name) {

@@ -676,6 +676,8 @@ fn command_line_reads_tracked_paths_and_reports_rebound_heights() {
     assert!(json["settings"]["rebound_weight"].as_f64().is_some_and(|w| w > 1.0), "{}", json["settings"]);
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(md.contains("### Rebound heights of the tracked runs"), "{md}");
+    // The shipped settings that fix the true model read.
+    CalibrationConfig::read(&shipped.join("truth.toml")).unwrap();
 }
 
 #[test]
