@@ -4,9 +4,8 @@
 //! Residuals are `observed − median simulated run-out` (negative: the model runs too far) and the rest-point
 //! offset (distance from the observed rest point to the median simulated one), and on a tracked campaign the
 //! rebound residual `observed − median simulated rebound height` ([`super::rebound`]) of the tracked runs.
-//! Covariates come only from the
-//! release and the simulations, never from the observed outcome, so that no covariate correlates with a residual
-//! by construction.
+//! Covariates come only from the release and the simulations, never from the observed outcome, so that no covariate
+//! correlates with a residual by construction.
 
 use super::model::{Model, RunSims};
 use super::runs::FieldRun;
