@@ -678,6 +678,35 @@ fn command_line_reads_tracked_paths_and_reports_rebound_heights() {
     assert!(md.contains("### Rebound heights of the tracked runs"), "{md}");
     // The shipped settings that fix the true model read.
     CalibrationConfig::read(&shipped.join("truth.toml")).unwrap();
+    // `rebound_weight = 0`: the loop decides as it would without the tracks file.
+    let untracked = dir.path().join("untracked");
+    std::fs::create_dir(&untracked).unwrap();
+    for f in ["release_points.csv", "observed_deposition.csv", "block_metadata.csv", "profile.csv"] {
+        std::fs::copy(shipped.join(f), untracked.join(f)).unwrap();
+    }
+    let small = "max_evaluations = 20\nrepeats = 8\n[back_analysis]\nenabled = false\n\
+                 [effects]\nmax_rounds = 1\nrefit_evaluations = 10\ncv_refit_evaluations = 10\n";
+    std::fs::write(&settings, format!("rebound_weight = 0\n{small}")).unwrap();
+    let final_parameters = |campaign: &std::path::Path, out: &std::path::Path| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
+            .arg("calibrate")
+            .arg(campaign)
+            .arg("--terrain")
+            .arg(shipped.join("profile.csv"))
+            .args(["--model", "2dlm", "--config"])
+            .arg(&settings)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+        (json["final"]["parameters"].clone(), json["effects_added"].as_array().unwrap().len())
+    };
+    let (a, b) =
+        (final_parameters(&shipped, &dir.path().join("w0")), final_parameters(&untracked, &dir.path().join("u")));
+    assert_eq!(a, b);
 }
 
 #[test]

@@ -471,8 +471,11 @@ fn propose(
 ) -> Vec<Proposal> {
     let cfg = ctx.cfg;
     let alpha = cfg.effects.propose_alpha;
-    // Run-out residuals, and on a tracked campaign the rebound residuals: both carry an effect's signature.
-    let runout: Vec<&Diagnostic> = diags.iter().filter(|d| d.residual == "runout" || d.residual == "rebound").collect();
+    // Run-out residuals, and on a tracked campaign scored with its rebounds the rebound residuals: both carry an
+    // effect's signature.
+    let rebounds = cfg.rebound_weight.is_some_and(|w| w > 0.0);
+    let runout: Vec<&Diagnostic> =
+        diags.iter().filter(|d| d.residual == "runout" || (rebounds && d.residual == "rebound")).collect();
     let mut props = Vec::new();
     for def in allowed {
         match def.kind {
