@@ -27,6 +27,9 @@ pub struct Model2d {
     materials: Vec<String>,
     options: Options2d,
     release_attempts: usize,
+    /// Measure each simulated path's rebound height (only a tracked run needs it; it costs about a third of a 2DLM
+    /// simulation).
+    rebounds: bool,
     /// The campaign folder and the profile file, for [`Model::scenario_files`] (`None` when built from parts).
     files: Option<(PathBuf, PathBuf)>,
 }
@@ -51,6 +54,7 @@ impl Model2d {
                 let heights =
                     track.iter().map(|q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z));
                 r.rebound_height_m = Some(rebound_height_m(heights));
+                model.rebounds = true;
             }
         }
         Ok(model)
@@ -81,7 +85,14 @@ impl Model2d {
             }
         }
         let materials = profile.material_names().to_vec();
-        Ok(Model2d { runs, group_names, profile, materials, options, release_attempts: 1, files: None })
+        let rebounds = runs.iter().any(|r| r.rebound_height_m.is_some());
+        Ok(Model2d { runs, group_names, profile, materials, options, release_attempts: 1, rebounds, files: None })
+    }
+
+    /// The model measuring every simulated path's rebound height, or not (by default: if a run is tracked).
+    pub fn with_rebounds(mut self, on: bool) -> Model2d {
+        self.rebounds = on;
+        self
     }
 
     /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model2d::from_parts`]).
@@ -273,10 +284,10 @@ impl Prepared for Prepared2d<'_> {
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
         let _ = self.model;
         let profile = self.slope.profile();
-        let mut obs = PathObserver2d::new(profile);
+        let mut obs = PathObserver2d::new(profile, self.model.rebounds);
         let r = simulate_run(&self.slope, &self.options, run, repeat, seed, &mut obs);
         let mut summary = obs.summary;
-        summary.rebound_height_m = obs.rebound.height_m();
+        summary.rebound_height_m = obs.rebound.map_or(0.0, |r| r.height_m());
         let total: f64 = summary.material_fraction.iter().sum();
         if total > 0.0 {
             summary.slope_mean_deg /= total;
@@ -370,14 +381,16 @@ struct PathObserver2d<'a> {
     profile: &'a Profile,
     summary: PathSummary,
     thinner: PathThinner,
-    rebound: Rebound,
+    /// The rebound height so far, if measured.
+    rebound: Option<Rebound>,
 }
 
 impl<'a> PathObserver2d<'a> {
-    fn new(profile: &'a Profile) -> Self {
+    fn new(profile: &'a Profile, rebounds: bool) -> Self {
         let summary =
             PathSummary { material_fraction: vec![0.0; profile.material_names().len()], ..Default::default() };
-        PathObserver2d { profile, summary, thinner: PathThinner::default(), rebound: Rebound::default() }
+        let rebound = rebounds.then(Rebound::default);
+        PathObserver2d { profile, summary, thinner: PathThinner::default(), rebound }
     }
 
     /// Adds a horizontal stretch [x0, x1] of the path.
@@ -415,17 +428,21 @@ impl PathObserver for PathObserver2d<'_> {
         let e = piece.end_position();
         self.stretch(piece.x0_m, e[0]);
         // The flight every 0.05 s and at its end (its apex is missed by at most g·0.025²/2 ≈ 3 mm).
-        let steps = (piece.duration_s / 0.05).ceil().max(1.0) as usize;
-        for i in 0..=steps {
-            let [x, z] = piece.position_at(piece.duration_s * i as f64 / steps as f64);
-            self.rebound.offer(self.profile.z_at(x).map_or(f64::NAN, |g| z - g));
+        if let Some(rebound) = &mut self.rebound {
+            let steps = (piece.duration_s / 0.05).ceil().max(1.0) as usize;
+            for i in 0..=steps {
+                let [x, z] = piece.position_at(piece.duration_s * i as f64 / steps as f64);
+                rebound.offer(self.profile.z_at(x).map_or(f64::NAN, |g| z - g));
+            }
         }
     }
 
     fn slide(&mut self, piece: &SlidePiece) {
         let e = piece.end_position();
         self.stretch(piece.x0_m, e[0]);
-        self.rebound.offer(0.0);
+        if let Some(rebound) = &mut self.rebound {
+            rebound.offer(0.0);
+        }
     }
 
     fn impact(&mut self, ev: &ImpactEvent) {
@@ -462,7 +479,9 @@ mod tests {
         let mut run = crate::calibrate::metrics::tests::run(0, 0, 1.0);
         run.release_m = [50.0, 0.0, ground + 10.0];
         run.rest_m = [51.0, 0.0, ground];
-        let model = Model2d::from_parts(vec![run.clone()], vec!["g".into()], profile, Options2d::default()).unwrap();
+        let model = Model2d::from_parts(vec![run.clone()], vec!["g".into()], profile, Options2d::default())
+            .unwrap()
+            .with_rebounds(true);
         let c =
             Candidate { params: material_params_2d("ground", [0.5, 0.0, 0.8, 0.0, 30.0, 0.0]), effects: Vec::new() };
         let sim = model.prepare(&c).unwrap().simulate(&run, 0, 1);

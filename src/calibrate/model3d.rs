@@ -34,6 +34,8 @@ pub struct Model3d {
     dem: Option<Grid>,
     median_mass_kg: f64,
     release_attempts: usize,
+    /// Measure each simulated path's rebound height (only a tracked run needs it).
+    rebounds: bool,
     /// The campaign folder and the terrain as read, for [`Model::scenario_toml`] (`None` when built from parts).
     files: Option<(std::path::PathBuf, TerrainSpec)>,
 }
@@ -114,6 +116,7 @@ impl Model3d {
                     model.terrain.surface.height(p.x, p.y).map_or(f64::NAN, |z| p.z - z)
                 });
                 model.runs[k].rebound_height_m = Some(rebound_height_m(heights));
+                model.rebounds = true;
             }
         }
         Ok(model)
@@ -150,6 +153,7 @@ impl Model3d {
         let mut masses: Vec<f64> = runs.iter().map(|r| r.mass_kg).collect();
         masses.sort_by(|a, b| a.total_cmp(b));
         let median_mass_kg = masses.get(masses.len() / 2).copied().unwrap_or(100.0);
+        let rebounds = runs.iter().any(|r| r.rebound_height_m.is_some());
         Ok(Model3d {
             runs,
             group_names,
@@ -160,8 +164,15 @@ impl Model3d {
             dem,
             median_mass_kg,
             release_attempts: 1,
+            rebounds,
             files: None,
         })
+    }
+
+    /// The model measuring every simulated path's rebound height, or not (by default: if a run is tracked).
+    pub fn with_rebounds(mut self, on: bool) -> Model3d {
+        self.rebounds = on;
+        self
     }
 
     /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model3d::from_parts`]).
@@ -385,7 +396,7 @@ impl Prepared for Prepared3d<'_> {
         let v = terrain.up.to_internal(run.velocity_mps);
         let w = terrain.up.to_internal(run.spin_radps);
         let start = measured_release(terrain, body, p, v, w, &mut rng);
-        let mut obs = PathObserver3d::new(terrain);
+        let mut obs = PathObserver3d::new(terrain, self.model.rebounds);
         let out = simulate(terrain, body, start, &self.sim, &mut rng, &mut obs);
         let end = out.final_state.position_m;
         let d = end - start.position_m;
@@ -393,7 +404,7 @@ impl Prepared for Prepared3d<'_> {
         let o = terrain.origin;
         let path = obs.thinner.finish(end.x + o.x, end.y + o.y);
         let mut summary = obs.summary;
-        summary.rebound_height_m = obs.rebound.height_m();
+        summary.rebound_height_m = obs.rebound.map_or(0.0, |r| r.height_m());
         let total = summary.material_fraction.iter().sum::<f64>();
         if total > 0.0 {
             summary.slope_mean_deg /= total;
@@ -431,13 +442,15 @@ struct PathObserver3d<'a> {
     last: Option<Vector3<f64>>,
     summary: PathSummary,
     thinner: PathThinner,
-    rebound: Rebound,
+    /// The rebound height so far, if measured.
+    rebound: Option<Rebound>,
 }
 
 impl<'a> PathObserver3d<'a> {
-    fn new(terrain: &'a Terrain) -> Self {
+    fn new(terrain: &'a Terrain, rebounds: bool) -> Self {
         let summary = PathSummary { material_fraction: vec![0.0; terrain.materials.len()], ..Default::default() };
-        PathObserver3d { terrain, last: None, summary, thinner: PathThinner::default(), rebound: Rebound::default() }
+        let rebound = rebounds.then(Rebound::default);
+        PathObserver3d { terrain, last: None, summary, thinner: PathThinner::default(), rebound }
     }
 }
 
@@ -446,7 +459,9 @@ impl Observer for PathObserver3d<'_> {
         let x = s.position_m;
         let o = self.terrain.origin;
         self.thinner.offer(x.x + o.x, x.y + o.y, 1.0);
-        self.rebound.offer(self.terrain.surface.height(x.x, x.y).map_or(f64::NAN, |z| x.z - z));
+        if let Some(rebound) = &mut self.rebound {
+            rebound.offer(self.terrain.surface.height(x.x, x.y).map_or(f64::NAN, |z| x.z - z));
+        }
         if let Some(last) = self.last {
             let step = (x.x - last.x).hypot(x.y - last.y);
             if step > 0.0 {
@@ -479,6 +494,46 @@ impl Observer for PathObserver3d<'_> {
 mod tests {
     use super::*;
     use crate::calibrate::{base_candidate, effects::EffectKind, params::EffectSpec, runs::field_runs};
+
+    #[test]
+    fn a_tracked_run_on_the_terrain_gets_its_observed_rebound_and_simulated_ones() {
+        // The Tschamut campaign with one run tracked: 2 m above the ground at its release, on the ground 5 m
+        // downhill, 1.5 m above it 10 m downhill, on the ground again: rebound 1.5 m, read on the same terrain.
+        let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/tschamut2014");
+        let dir = tempfile::tempdir().unwrap();
+        for f in ["release_points.csv", "observed_deposition.csv", "block_metadata.csv"] {
+            std::fs::copy(shipped.join(f), dir.path().join(f)).unwrap();
+        }
+        let terrain_file = shipped.join("terrain_proxy.asc");
+        let cfg = CalibrationConfig::default();
+        let campaign = Campaign::read(dir.path()).unwrap();
+        let (runs, groups) = field_runs(&campaign, cfg.group_link_m).unwrap();
+        let untracked = Model3d::new(&campaign, runs, groups, &terrain_file, &cfg, "test").unwrap();
+        let first = &untracked.runs()[0];
+        let [x0, y0, _] = first.release_m;
+        let ground = |x: f64, y: f64| {
+            let p = untracked.local([x, y, 0.0]);
+            untracked.terrain.surface.height(p.x, p.y).unwrap() - p.z
+        };
+        let mut track = String::from("trajectory_id,time_s,x_m,y_m,z_m\n");
+        for (k, (dy, h)) in [(0.0, 2.0), (-5.0, 0.0), (-10.0, 1.5), (-15.0, 0.0)].iter().enumerate() {
+            let (x, y) = (x0, y0 + dy);
+            track += &format!("{},{},{x},{y},{}\n", first.id, 0.5 * k as f64, ground(x, y) + h);
+        }
+        std::fs::write(dir.path().join("observed_trajectories.csv"), track).unwrap();
+        let campaign = Campaign::read(dir.path()).unwrap();
+        let (runs, groups) = field_runs(&campaign, cfg.group_link_m).unwrap();
+        let model = Model3d::new(&campaign, runs, groups, &terrain_file, &cfg, "test").unwrap();
+        let run = &model.runs()[0];
+        assert!((run.rebound_height_m.unwrap() - 1.5).abs() < 1e-6, "{:?}", run.rebound_height_m);
+        assert!(model.runs()[1..].iter().all(|r| r.rebound_height_m.is_none()));
+        // Simulated paths of a tracked campaign are measured too (an untracked one skips the work).
+        let (c, _) = base_candidate(&model, &cfg);
+        let rebound = |m: &Model3d| {
+            (0..4).map(|k| m.prepare(&c).unwrap().simulate(run, k, 3).summary.rebound_height_m).fold(0.0, f64::max)
+        };
+        assert!(rebound(&model) > 0.0 && rebound(&untracked) == 0.0);
+    }
 
     /// `calibrated.toml` is the calibrated model: read back as `talus run` reads it, its terrain (with a zone the
     /// loop added) has the same materials triangle by triangle and its engine the same settings and effects; it
