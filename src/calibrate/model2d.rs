@@ -27,8 +27,8 @@ pub struct Model2d {
     materials: Vec<String>,
     options: Options2d,
     release_attempts: usize,
-    /// Measure each simulated path's rebound height (only a tracked run needs it; it costs about a third of a 2DLM
-    /// simulation).
+    /// Measure each simulated path's rebound height (only a tracked run needs it; it makes a 2DLM simulation about
+    /// a third slower).
     rebounds: bool,
     /// The campaign folder and the profile file, for [`Model::scenario_files`] (`None` when built from parts).
     files: Option<(PathBuf, PathBuf)>,
