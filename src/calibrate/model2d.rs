@@ -6,7 +6,7 @@ use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
-use super::rebound::{rebound_height_m, Rebound};
+use super::rebound::{observed_rebound_m, Rebound};
 use super::runs::FieldRun;
 use super::scenario_file;
 use crate::campaign::{Campaign, TrackPoint};
@@ -53,7 +53,7 @@ impl Model2d {
                 let profile = &model.profile;
                 let heights =
                     track.iter().map(|q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z));
-                r.rebound_height_m = Some(rebound_height_m(heights));
+                r.rebound_height_m = Some(observed_rebound_m(&r.id, heights)?);
                 model.rebounds = true;
             }
         }

@@ -6,7 +6,7 @@ use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
-use super::rebound::{rebound_height_m, Rebound};
+use super::rebound::{observed_rebound_m, Rebound};
 use super::runs::FieldRun;
 use super::scenario_file;
 use crate::campaign::Campaign;
@@ -115,7 +115,7 @@ impl Model3d {
                     let p = model.local(q.position_m);
                     model.terrain.surface.height(p.x, p.y).map_or(f64::NAN, |z| p.z - z)
                 });
-                model.runs[k].rebound_height_m = Some(rebound_height_m(heights));
+                model.runs[k].rebound_height_m = Some(observed_rebound_m(&model.runs[k].id, heights)?);
                 model.rebounds = true;
             }
         }
@@ -533,6 +533,13 @@ mod tests {
             (0..4).map(|k| m.prepare(&c).unwrap().simulate(run, k, 3).summary.rebound_height_m).fold(0.0, f64::max)
         };
         assert!(rebound(&model) > 0.0 && rebound(&untracked) == 0.0);
+        // A track without y_m lies at y = 0, off this terrain: an error naming the file and the run.
+        let no_y = format!("trajectory_id,time_s,x_m,z_m\n{0},0,{x0},1500\n{0},1,{x0},1490\n", first.id);
+        std::fs::write(dir.path().join("observed_trajectories.csv"), no_y).unwrap();
+        let campaign = Campaign::read(dir.path()).unwrap();
+        let (runs, groups) = field_runs(&campaign, cfg.group_link_m).unwrap();
+        let e = Model3d::new(&campaign, runs, groups, &terrain_file, &cfg, "test").unwrap_err().to_string();
+        assert!(e.contains("observed_trajectories.csv, run") && e.contains("y_m"), "{e}");
     }
 
     /// `calibrated.toml` is the calibrated model: read back as `talus run` reads it, its terrain (with a zone the

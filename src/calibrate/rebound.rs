@@ -8,6 +8,8 @@
 //! the two compare like for like. Noise on a tracked path raises it (by a median 0.13 m for Gaussian noise of sd
 //! 0.1 m on every point of a 52-point path; docs/calibration.md, "Tracked paths").
 
+use crate::error::{Error, Result};
+
 /// Streams heights above the ground and keeps the largest rise over the lowest earlier height.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rebound {
@@ -44,6 +46,27 @@ pub fn rebound_height_m(heights_m: impl IntoIterator<Item = f64>) -> f64 {
         r.offer(h);
     }
     r.height_m()
+}
+
+/// The rebound height of run `run_id`'s tracked path from its heights above the ground (non-finite where a point is
+/// off the terrain or profile), m.
+///
+/// # Errors
+/// No point of the path lies over the terrain: the track is in another frame, or lacks `y_m`.
+pub fn observed_rebound_m(run_id: &str, heights_m: impl IntoIterator<Item = f64>) -> Result<f64> {
+    let (mut r, mut over) = (Rebound::default(), 0usize);
+    for h in heights_m {
+        over += usize::from(h.is_finite());
+        r.offer(h);
+    }
+    if over == 0 {
+        return Err(Error::invalid(
+            format!("observed_trajectories.csv, run {run_id}"),
+            "no tracked point lies over the terrain",
+            "give the track in the frame of release_points.csv, with y_m on a 3D terrain",
+        ));
+    }
+    Ok(r.height_m())
 }
 
 #[cfg(test)]
