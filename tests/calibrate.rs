@@ -666,6 +666,7 @@ fn command_line_reads_tracked_paths_and_reports_rebound_heights() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stderr).contains("calibration runs were tracked"));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("held-out rebound_mae_m "));
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     for part in ["calibration", "holdout"] {

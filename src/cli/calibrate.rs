@@ -170,6 +170,11 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         ("held-out", &r.baseline.holdout, &r.final_stage.holdout)
     };
     println!("{set} runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m, runout_w1_m {:.2} -> {:.2} m, coverage_90 {:.2} -> {:.2}", b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, b.runout_w1_m, f.runout_w1_m, b.coverage_90, f.coverage_90);
+    if let (Some(mb), Some(mf), Some(cb), Some(cf)) =
+        (b.rebound_mae_m, f.rebound_mae_m, b.rebound_crps_m, f.rebound_crps_m)
+    {
+        println!("{set} rebound_mae_m {mb:.3} -> {mf:.3} m, rebound_crps_m {cb:.3} -> {cf:.3} m (tracked runs)");
+    }
     println!("wrote {}", a.out.join("report.md").display());
     let (file, command) = match kind {
         ModelKind::Rigid3d => (calibrate::scenario_file::RUN_SCENARIO, "run"),
