@@ -282,7 +282,6 @@ impl Model2d {
 
 impl Prepared for Prepared2d<'_> {
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
-        let _ = self.model;
         let profile = self.slope.profile();
         let mut obs = PathObserver2d::new(profile, self.model.rebounds);
         let r = simulate_run(&self.slope, &self.options, run, repeat, seed, &mut obs);
