@@ -4,9 +4,10 @@
 //! on stdout; a case run again replaces its row, the others keep theirs), and a full report per case.
 //!
 //! Run: cargo run --release --example calibration_study [-- CASE ...]   (cases: speed speed_mixed size zone rough
-//! speed_tracked speed_mixed_tracked speed_2 speed_3 speed_tracked_2 speed_tracked_3 control_a_N control_b_N control_c_N control_d_N control_a_tracked_N
-//! control_d_tracked_N 2d_speed 2d_speed_tracked 2d_control_a_tracked_N 2d_size 2d_zone 2d_control_a_N 2d_control_b_N,
-//! N = 1..3, a trailing * matches a prefix; default: all)
+//! speed_tracked speed_mixed_tracked size_tracked speed_2 speed_3 speed_tracked_2 speed_tracked_3 control_a_N
+//! control_b_N control_c_N control_d_N control_a_tracked_N control_d_tracked_N 2d_speed 2d_speed_tracked
+//! 2d_control_a_tracked_N 2d_size 2d_zone 2d_control_a_N 2d_control_b_N, N = 1..3, a trailing * matches a prefix;
+//! default: all)
 use std::time::Instant;
 use talus::calibrate::synthetic::{case_2d, case_3d, synthetic_2d, synthetic_3d, zone_overlap, Hidden};
 use talus::calibrate::{self, params::Region, split, CalibrationConfig, Model};
@@ -31,10 +32,11 @@ fn main() {
     let seeds = [1u64, 2, 3];
     // The effect cases on data seed 1 (`NAME`), and the speed case with and without tracks on seeds 2 and 3 as well
     // (`NAME_2`, `NAME_3`).
-    let effect_cases = ["speed", "speed_mixed", "size", "zone", "rough", "speed_tracked", "speed_mixed_tracked"]
-        .into_iter()
-        .map(|n| (n.to_string(), n, 1))
-        .chain(["speed", "speed_tracked"].into_iter().flat_map(|n| [2, 3].map(|s| (format!("{n}_{s}"), n, s))));
+    let effect_cases =
+        ["speed", "speed_mixed", "size", "zone", "rough", "speed_tracked", "speed_mixed_tracked", "size_tracked"]
+            .into_iter()
+            .map(|n| (n.to_string(), n, 1))
+            .chain(["speed", "speed_tracked"].into_iter().flat_map(|n| [2, 3].map(|s| (format!("{n}_{s}"), n, s))));
     for (label, name, seed) in effect_cases {
         let spec = case_3d(name, seed).unwrap();
         let hidden = spec.hidden.clone();
