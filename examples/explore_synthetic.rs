@@ -6,14 +6,14 @@
 //! Run: cargo run --release --example explore_synthetic [-- NAME ...]   (2d_control_a 2d_control_b 2d_speed_steep
 //! 2d_speed 2d_size 2d_zone speed speed_mixed size zone control_a control_b control_c control_d 3d_designs;
 //! mixed_designs [rivals] [DESIGN ...]; tracks [speed speed_mixed thrown3]; crps_noise; track_noise; default: all
-//! but 3d_designs, mixed_designs, tracks, crps_noise and track_noise; the 3DRB ones take about a minute each on 2 cores, 3d_designs
-//! 15 minutes, mixed_designs 7 minutes, tracks 4 minutes a design)
+//! but 3d_designs, mixed_designs, tracks, crps_noise and track_noise; the 3DRB ones take about a minute each on 2
+//! cores, 3d_designs 15 minutes, mixed_designs 7 minutes, tracks 4 minutes a design)
 use talus::calibrate::config::Objective;
 use talus::calibrate::effects::{EffectKind, MOBILITY_GRID};
-use talus::calibrate::metrics::{crps, metrics};
+use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::model3d::Model3d;
-use talus::calibrate::objective::objective;
+use talus::calibrate::objective::{objective, rebound_crps};
 use talus::calibrate::params::{Candidate, EffectSpec, MOBILITY};
 use talus::calibrate::synthetic::{
     case_2d, case_3d, material_params_2d, material_params_3d, standard_zone, steep_2d, synthetic_2d, synthetic_3d,
@@ -85,13 +85,7 @@ fn report_rivals(name: &str, spec: &Synthetic3d) {
 fn runout_and_rebound(model: &Model3d, c: &Candidate) -> (f64, f64) {
     let all: Vec<usize> = (0..model.runs().len()).collect();
     let sims = evaluate(model, c, &all, 12, 1, 0).unwrap();
-    let rebound: Vec<f64> = sims
-        .iter()
-        .map(|s| {
-            let sim: Vec<f64> = s.sims.iter().map(|x| x.summary.rebound_height_m).collect();
-            crps(&sim, model.runs()[s.run].rebound_height_m.unwrap())
-        })
-        .collect();
+    let rebound: Vec<f64> = sims.iter().map(|s| rebound_crps(&model.runs()[s.run], s).unwrap()).collect();
     (metrics(model.runs(), &sims).runout_mae_m, rebound.iter().sum::<f64>() / rebound.len() as f64)
 }
 
@@ -186,10 +180,6 @@ fn report_2d(name: &str, spec: &Synthetic2d) {
     );
 }
 
-/// How noisy is the effects loop's screening score? The mean CRPS over the `speed` case's calibration runs (the
-/// default seeded split) of its baseline fit (seed 1: Cr 0.43, friction 38.4°/29.2°) at each mobility factor of the
-/// screening, with 4 repeats per run (the screening's default until stop 26, `search_repeats`) and with 20 (its default
-/// since), on four seeds.
 /// How tracking noise on each point of a path raises its rebound height (the rise over the lowest point before it
 /// picks up the noise's extremes): the tracks of `examples/profile_campaign_tracked` (exact), with Gaussian noise on
 /// every height, against the exact ones.
@@ -224,6 +214,10 @@ fn track_noise() {
     }
 }
 
+/// How noisy is the effects loop's screening score? The mean CRPS over the `speed` case's calibration runs (the
+/// default seeded split) of its baseline fit (seed 1: Cr 0.43, friction 38.4°/29.2°) at each mobility factor of the
+/// screening, with 4 repeats per run (the screening's default until stop 26, `search_repeats`) and with 20 (its default
+/// since), on four seeds.
 fn crps_noise() {
     let model = synthetic_3d(&case_3d("speed", 1).unwrap(), SimParams::default()).unwrap();
     let cfg = CalibrationConfig::default();
@@ -387,8 +381,11 @@ fn main() {
             release_speeds_mps: vec![[3.0, 4.0], [3.0, 4.0], [12.0, 14.0]],
             ..mixed.clone()
         };
-        for (name, spec) in [("speed", speed), ("speed_mixed", mixed), ("thrown3", thrown)] {
-            if args.len() > 1 && !args.iter().any(|a| a == name) {
+        let designs = [("speed", speed), ("speed_mixed", mixed), ("thrown3", thrown)];
+        // Only the designs named, if any are.
+        let named = designs.iter().any(|(n, _)| args.iter().any(|a| a == n));
+        for (name, spec) in designs {
+            if named && !args.iter().any(|a| a == name) {
                 continue;
             }
             report_tracks(name, &Synthetic3d { track_noise_m: Some(0.1), ..spec });
