@@ -221,6 +221,7 @@ fn read_tracks(path: &Path, releases: &[Release]) -> Result<BTreeMap<String, Vec
         return Ok(tracks);
     }
     let t = Table::read(path, false)?;
+    let known: std::collections::BTreeSet<&str> = releases.iter().map(|r| r.trajectory_id.as_str()).collect();
     let (id, time, x, z) = (
         t.need("trajectory_id", COLUMN_HINT)?,
         t.need("time_s", COLUMN_HINT)?,
@@ -229,7 +230,7 @@ fn read_tracks(path: &Path, releases: &[Release]) -> Result<BTreeMap<String, Vec
     );
     for row in &t.rows {
         let tid = t.text(row, id, "trajectory_id")?;
-        if !releases.iter().any(|r| r.trajectory_id == tid) {
+        if !known.contains(tid) {
             return Err(t.error(
                 row,
                 format!("run '{tid}' has no release in release_points.csv"),

@@ -34,7 +34,7 @@
 //! the effects that pass, the one with the largest cut is kept, then refitted with the optimiser (together with
 //! the base parameters), and the loop starts again.
 
-use super::config::ModelKind;
+use super::config::{CalibrationConfig, ModelKind};
 use super::diagnose::{diagnose, spread_check, Diagnostic, DEPOSITION_EXCESS};
 use super::effects::{
     definition, effects_for, recentring, EffectDef, EffectKind, Recentring, CR_SCALE_GRID, MOBILITY_GRID,
@@ -47,6 +47,7 @@ use super::params::{
     apply_mobility_2d, apply_mobility_3d, fold_mobility, friction_over, Candidate, EffectSpec, FreeParam, Region,
     MOBILITY,
 };
+use super::runs::FieldRun;
 use super::split::folds;
 use super::stats::{mean, paired_sign_flip_p};
 use super::zone::zone_check;
@@ -450,10 +451,7 @@ fn refit_cv(
         // The fold's runs are predicted with the reported repeats: a steadier median for the paired test.
         let sims = ctx.sims(&c, &test, ctx.cfg.repeats)?;
         for (j, s) in test_pos.iter().zip(&sims) {
-            errors[*j] = CvError {
-                crps_m: run_score(ctx.cfg.rebound_weight.unwrap_or(0.0), &runs[s.run], s),
-                abs_m: (s.median_runout() - runs[s.run].runout_m).abs(),
-            };
+            errors[*j] = CvError::of(ctx.cfg, &runs[s.run], s);
         }
     }
     Ok(errors)
@@ -576,10 +574,7 @@ fn cross_validate(
         chosen[f] = best;
         for j in (0..cal.len()).filter(|&j| fold_of[j] == f) {
             let s = &settings[best][j];
-            errors[j] = CvError {
-                crps_m: run_score(ctx.cfg.rebound_weight.unwrap_or(0.0), &runs[s.run], s),
-                abs_m: (s.median_runout() - runs[s.run].runout_m).abs(),
-            };
+            errors[j] = CvError::of(ctx.cfg, &runs[s.run], s);
         }
     }
     (errors, chosen)
@@ -593,6 +588,16 @@ struct CvError {
     crps_m: f64,
     /// |median simulated − observed run-out|, m.
     abs_m: f64,
+}
+
+impl CvError {
+    /// The errors of `run`'s simulations `s`.
+    fn of(cfg: &CalibrationConfig, run: &FieldRun, s: &RunSims) -> CvError {
+        CvError {
+            crps_m: run_score(cfg.rebound_weight.unwrap_or(0.0), run, s),
+            abs_m: (s.median_runout() - run.runout_m).abs(),
+        }
+    }
 }
 
 /// The typical impact of the current model, where restitution effects are centred.

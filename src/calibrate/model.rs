@@ -85,6 +85,11 @@ impl RunSims {
         median(&self.runouts())
     }
 
+    /// The simulated rebound heights ([`super::rebound`]; 0 where the model did not measure them), m.
+    pub fn rebound_heights(&self) -> Vec<f64> {
+        self.sims.iter().map(|s| s.summary.rebound_height_m).collect()
+    }
+
     /// Quantile `p` of the simulated run-outs.
     pub fn runout_quantile(&self, p: f64) -> f64 {
         quantile_sorted(&sorted(&self.runouts()), p)

@@ -44,7 +44,7 @@ pub fn run_score(rebound_weight: f64, run: &FieldRun, s: &RunSims) -> f64 {
 
 /// The CRPS of a tracked run's simulated rebound heights against its observed one, m (`None` if not tracked).
 pub fn rebound_crps(run: &FieldRun, s: &RunSims) -> Option<f64> {
-    run.rebound_height_m.map(|obs| crps(&s.sims.iter().map(|x| x.summary.rebound_height_m).collect::<Vec<_>>(), obs))
+    run.rebound_height_m.map(|obs| crps(&s.rebound_heights(), obs))
 }
 
 /// The default rebound weight on calibration runs `which`: the mean absolute deviation from the median of their

@@ -54,19 +54,15 @@ pub fn rebound_height_m(heights_m: impl IntoIterator<Item = f64>) -> f64 {
 /// # Errors
 /// No point of the path lies over the terrain: the track is in another frame, or lacks `y_m`.
 pub fn observed_rebound_m(run_id: &str, heights_m: impl IntoIterator<Item = f64>) -> Result<f64> {
-    let (mut r, mut over) = (Rebound::default(), 0usize);
-    for h in heights_m {
-        over += usize::from(h.is_finite());
-        r.offer(h);
-    }
-    if over == 0 {
+    let heights_m: Vec<f64> = heights_m.into_iter().collect();
+    if !heights_m.iter().any(|h| h.is_finite()) {
         return Err(Error::invalid(
             format!("observed_trajectories.csv, run {run_id}"),
             "no tracked point lies over the terrain",
             "give the track in the frame of release_points.csv, with y_m on a 3D terrain",
         ));
     }
-    Ok(r.height_m())
+    Ok(rebound_height_m(heights_m))
 }
 
 #[cfg(test)]

@@ -425,10 +425,9 @@ pub fn material_params_3d(name: &str, v: [f64; 4]) -> Params {
     p
 }
 
-/// Simulates each run once under `truth` from data streams (seed + 1000, never used by calibration), adds noise,
-/// and stores the rest points and run-outs in `runs`.
-/// Observes the runs under the true model: rest points with noise `noise_m`, and rebound heights with noise
-/// `track_noise_m` (clipped at 0) if the campaign is tracked.
+/// Simulates each run once under `truth` from data streams ([`data_seed`], never used by calibration), adds noise,
+/// and stores the rest points (noise `noise_m`), run-outs and, on a tracked campaign, rebound heights (noise
+/// `track_noise_m`, clipped at 0) in `runs`.
 fn observe(
     model: &dyn Model,
     truth: &Candidate,
