@@ -29,6 +29,7 @@
 //! min_improvement = 0.05    # relative cut of the cross-validated mean CRPS to keep an effect
 //! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
 //! # screen_repeats = 20     # simulations per run in the loop's grid screening (default: repeats)
+//! one_se_rule = true        # of the effects that pass, the simplest within one standard error of the best
 //! ```
 
 use super::effects::{by_name, effects_for};
@@ -245,6 +246,9 @@ pub struct EffectsConfig {
     /// does not share the baseline's draw; 20 make the screening fair without making the population fit dearer
     /// (docs/calibration.md, "Speed against angle and place").
     pub screen_repeats: Option<usize>,
+    /// Among the effects that pass, keep the one with the fewest added parameters whose out-of-fold CRPS is within
+    /// one standard error of the best one's (default true; false: the largest cut, as until 2026-11-25).
+    pub one_se_rule: bool,
 }
 
 impl Default for EffectsConfig {
@@ -261,6 +265,7 @@ impl Default for EffectsConfig {
             refit_evaluations: None,
             cv_refit_evaluations: None,
             screen_repeats: None,
+            one_se_rule: true,
         }
     }
 }
@@ -330,6 +335,11 @@ pub struct CalibrationConfig {
     /// ([`super::objective::score`]); default: the ratio of the observed spreads on the calibration runs
     /// ([`super::objective::default_rebound_weight`]), 0 without tracked paths.
     pub rebound_weight: Option<f64>,
+    /// Standard deviation of the tracking system's error on a tracked point's height, m. When set, every simulated
+    /// path of a tracked run is measured as its track was: at the track's times (since its first point, taken as
+    /// the release), each height plus Gaussian noise of this sd ([`super::rebound::ReboundMeter`]); unset, every
+    /// sample of the simulated path counts as it is (default; right for smoothed or exact tracks).
+    pub track_noise_m: Option<f64>,
     /// Most objective evaluations of the population fit (default 60 for 3DRB, 300 for 2DLM).
     pub max_evaluations: Option<usize>,
     /// Threads (default 0: all cores). Results do not depend on it.
@@ -366,6 +376,7 @@ impl Default for CalibrationConfig {
             release_attempts: 1,
             objective: Objective::default(),
             rebound_weight: None,
+            track_noise_m: None,
             max_evaluations: None,
             threads: 0,
             materials: BTreeMap::new(),
@@ -542,6 +553,13 @@ impl CalibrationConfig {
                 f("rebound_weight"),
                 "must be a non-negative number",
                 "leave it out (the ratio of observed spreads) or use 0 to score run-outs only",
+            ));
+        }
+        if self.track_noise_m.is_some_and(|w| !(w.is_finite() && w >= 0.0)) {
+            return Err(Error::invalid(
+                f("track_noise_m"),
+                "must be a non-negative distance",
+                "use the tracking system's height error in metres, e.g. 0.1, or leave it out for exact tracks",
             ));
         }
         if self.max_evaluations.is_some_and(|n| n < 5) {

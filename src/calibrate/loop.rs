@@ -31,8 +31,9 @@
 //!
 //! **"Clearly improves"** (ours): the out-of-fold mean CRPS falls by at least `min_improvement` (5 %) and a
 //! one-sided paired sign-flip permutation test on the per-run CRPS differences gives p ≤ `alpha` (0.05). Among
-//! the effects that pass, the one with the largest cut is kept, then refitted with the optimiser (together with
-//! the base parameters), and the loop starts again.
+//! the effects that pass, the one with the fewest added parameters whose out-of-fold CRPS is within one standard
+//! error of the best one's is kept (the one-standard-error rule, [`choose`]; `one_se_rule = false`: the largest
+//! cut), then refitted with the optimiser (together with the base parameters), and the loop starts again.
 
 use super::config::{CalibrationConfig, ModelKind};
 use super::diagnose::{diagnose, spread_check, Diagnostic, DEPOSITION_EXCESS};
@@ -49,7 +50,7 @@ use super::params::{
 };
 use super::runs::FieldRun;
 use super::split::folds;
-use super::stats::{mean, paired_sign_flip_p};
+use super::stats::{mean, paired_sign_flip_p, sample_sd};
 use super::zone::zone_check;
 use crate::random::stream;
 use serde::{Deserialize, Serialize};
@@ -198,7 +199,7 @@ pub fn effects_loop(
         base_arm.fold_settings = vec![(0..base_arm.settings.len()).collect(); cfg.inner_folds];
         let (e0_grid, base_chosen) = cross_validate(ctx, cal, &fold_of, &base_arm.settings, &base_arm.fold_settings);
         let mut e0_refit: Option<Vec<CvError>> = None;
-        let mut best: Option<(f64, EffectTrial, Candidate, Vec<FreeParam>)> = None;
+        let mut passed: Vec<Passed> = Vec::new();
         for prop in proposals {
             (ctx.log)(&format!("effects loop, round {round}: trying {}", prop.label));
             let arm = if prop.def.kind == EffectKind::Zone {
@@ -317,14 +318,47 @@ pub fn effects_loop(
                 && p <= cfg.effects.alpha
                 && full.effect(&prop.label).is_some();
             out.trials.push(trial.clone());
-            if passes && best.as_ref().is_none_or(|b| improvement > b.0) {
-                best = Some((improvement, trial, full, effect_free));
+            if passes {
+                passed.push(Passed {
+                    cv_crps_m: after.iter().map(|e| e.crps_m).collect(),
+                    added_parameters: effect_free.len() - free.len(),
+                    trial,
+                    full,
+                    free: effect_free,
+                });
             }
         }
-        let Some((_, trial, chosen, refit_free)) = best else {
+        let arms: Vec<(&[f64], usize)> = passed.iter().map(|p| (p.cv_crps_m.as_slice(), p.added_parameters)).collect();
+        let Some(pick) = choose(&arms, cfg.effects.one_se_rule) else {
             (ctx.log)("effects loop: no effect clearly improves the cross-validated error");
             break;
         };
+        let rivals: Vec<serde_json::Value> = passed
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| *k != pick.kept)
+            .map(|(k, p)| {
+                serde_json::json!({
+                    "label": p.trial.label,
+                    "relative_improvement": p.trial.relative_improvement,
+                    "added_parameters": p.added_parameters,
+                    "within_one_se_of_best": pick.within_one_se[k],
+                })
+            })
+            .collect();
+        let Passed { trial, full: chosen, free: refit_free, added_parameters, .. } = passed.swap_remove(pick.kept);
+        if !rivals.is_empty() {
+            (ctx.log)(&format!(
+                "effects loop, round {round}: {} effects pass; {} kept ({added_parameters} added parameters{})",
+                rivals.len() + 1,
+                trial.label,
+                if pick.simpler_than_best {
+                    ", the simplest within one standard error of the best"
+                } else {
+                    ", the best"
+                }
+            ));
+        }
         if let Some(t) = out.trials.iter_mut().rev().find(|t| t.label == trial.label && t.round == round) {
             t.kept = true;
         }
@@ -365,6 +399,9 @@ pub fn effects_loop(
             "p_value": trial.p_value,
             "inner_folds": cfg.inner_folds,
             "criterion": format!("relative improvement >= {} and one-sided paired permutation p <= {}", cfg.effects.min_improvement, cfg.effects.alpha),
+            "added_parameters": added_parameters,
+            "selection": if cfg.effects.one_se_rule { SELECTION_ONE_SE } else { SELECTION_BEST },
+            "rivals": rivals,
         });
         out.added.push(AddedEffect {
             name: def.name.to_string(),
@@ -379,6 +416,59 @@ pub fn effects_loop(
 }
 
 /// Multiplies every material's (and zone's) mean restitution (Cr in 3DRB, Rn in 2DLM) by `f`, capped at 1.
+const SELECTION_ONE_SE: &str = "of the effects that pass, the one with the fewest added parameters whose out-of-fold \
+    mean CRPS is within one standard error (of the per-run differences) of the best one's";
+const SELECTION_BEST: &str = "of the effects that pass, the one with the largest cut";
+
+/// An effect that passed the cross-validation this round.
+struct Passed {
+    /// Each calibration run's out-of-fold CRPS under the effect's arm, m.
+    cv_crps_m: Vec<f64>,
+    /// Parameters the effect adds to the fit (a zone's material; its polygon, chosen from the data, not counted).
+    added_parameters: usize,
+    trial: EffectTrial,
+    full: Candidate,
+    free: Vec<FreeParam>,
+}
+
+/// The choice among the effects that pass.
+struct Pick {
+    kept: usize,
+    /// For each passing effect: is its out-of-fold CRPS within one standard error of the best one's.
+    within_one_se: Vec<bool>,
+    /// The kept effect is not the one with the largest cut.
+    simpler_than_best: bool,
+}
+
+/// Which passing effect to keep. Without `one_se_rule`, the largest cut. With it, the one-standard-error rule
+/// (Breiman et al. 1984, *Classification and Regression Trees*, §3.4.3; Hastie, Tibshirani & Friedman 2009, §7.10):
+/// among the effects whose mean out-of-fold CRPS exceeds the best one's by at most the standard error of the
+/// per-run paired differences, the one with the fewest added parameters (ties: the larger cut). When two effects
+/// fit the calibration runs alike, the data do not choose between them, and the simpler one is kept; the others
+/// are reported as rivals.
+/// `arms`: each passing effect's per-run out-of-fold CRPS (the same runs in the same order) and its added
+/// parameters.
+fn choose(arms: &[(&[f64], usize)], one_se_rule: bool) -> Option<Pick> {
+    let means: Vec<f64> = arms.iter().map(|a| mean(a.0)).collect();
+    let best = (0..arms.len()).min_by(|&a, &b| means[a].total_cmp(&means[b]))?;
+    let within_one_se: Vec<bool> = arms
+        .iter()
+        .map(|a| {
+            let d: Vec<f64> = a.0.iter().zip(arms[best].0).map(|(x, y)| x - y).collect();
+            mean(&d) <= sample_sd(&d) / (d.len() as f64).sqrt()
+        })
+        .collect();
+    let kept = if one_se_rule {
+        (0..arms.len())
+            .filter(|&k| within_one_se[k])
+            .min_by(|&a, &b| arms[a].1.cmp(&arms[b].1).then(means[a].total_cmp(&means[b])))
+            .unwrap_or(best)
+    } else {
+        best
+    };
+    Some(Pick { kept, within_one_se, simpler_than_best: kept != best })
+}
+
 fn scale_cr(c: &mut Candidate, f: f64) {
     map_params(c, &[".cr_mean", ".rn_mean"], |v| (v * f).min(1.0));
 }
@@ -832,6 +922,29 @@ fn sims_reusing(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_one_se_rule_keeps_the_simplest_effect_that_fits_as_well_as_the_best() {
+        // Per-run out-of-fold CRPS of three passing effects on 40 runs: a zone (4 parameters) best by 0.05 m on
+        // average with per-run differences of sd 0.5 m (standard error 0.08 m), a speed effect (1 parameter) and
+        // a second one-parameter effect 0.5 m worse than the zone everywhere.
+        let zone: Vec<f64> = (0..40).map(|i| 3.0 + 0.1 * (i % 7) as f64).collect();
+        let speed: Vec<f64> =
+            zone.iter().enumerate().map(|(i, z)| z + 0.05 + if i % 2 == 0 { 0.5 } else { -0.5 }).collect();
+        let worse: Vec<f64> = zone.iter().map(|z| z + 0.5).collect();
+        let arms = [(zone.as_slice(), 4), (speed.as_slice(), 1), (worse.as_slice(), 1)];
+        let pick = choose(&arms, true).unwrap();
+        assert_eq!(pick.kept, 1);
+        assert!(pick.simpler_than_best);
+        assert_eq!(pick.within_one_se, vec![true, true, false]);
+        // Without the rule, or when the simple effect is clearly worse, the largest cut is kept.
+        assert_eq!(choose(&arms, false).unwrap().kept, 0);
+        let pick = choose(&[(zone.as_slice(), 4), (worse.as_slice(), 1)], true).unwrap();
+        assert_eq!((pick.kept, pick.simpler_than_best), (0, false));
+        // Equal complexity: the better one.
+        assert_eq!(choose(&[(worse.as_slice(), 1), (speed.as_slice(), 1)], true).unwrap().kept, 1);
+        assert!(choose(&[], true).is_none());
+    }
 
     #[test]
     fn the_spread_check_proposes_roughness_alone() {

@@ -225,6 +225,7 @@ pub(crate) mod tests {
             runout_m: obs,
             group,
             rebound_height_m: None,
+            track_times_s: Vec::new(),
         }
     }
 

@@ -6,7 +6,7 @@ use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
-use super::rebound::{observed_rebound_m, Rebound};
+use super::rebound::{observed_rebound_m, rebound_meter, ReboundMeter};
 use super::runs::FieldRun;
 use super::scenario_file;
 use crate::campaign::{Campaign, TrackPoint};
@@ -30,6 +30,8 @@ pub struct Model2d {
     /// Measure each simulated path's rebound height (only a tracked run needs it; it makes a 2DLM simulation about
     /// a third slower).
     rebounds: bool,
+    /// The tracking error's sd, m, when simulated paths are read as the tracks were (`track_noise_m`).
+    track_noise_m: Option<f64>,
     /// The campaign folder and the profile file, for [`Model::scenario_files`] (`None` when built from parts).
     files: Option<(PathBuf, PathBuf)>,
 }
@@ -46,6 +48,7 @@ impl Model2d {
         let profile = Profile::from_csv_path(profile_file)?;
         let mut model = Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
             .with_release_attempts(cfg.release_attempts);
+        model.track_noise_m = cfg.track_noise_m;
         model.files = Some((campaign.dir.clone(), profile_file.to_path_buf()));
         // The observed rebound of each tracked run, above the same profile as the simulated ones.
         for r in model.runs.iter_mut() {
@@ -54,6 +57,7 @@ impl Model2d {
                 let heights =
                     track.iter().map(|q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z));
                 r.rebound_height_m = Some(observed_rebound_m(&r.id, heights)?);
+                r.track_times_s = track.iter().map(|q| q.time_s - track[0].time_s).collect();
                 model.rebounds = true;
             }
         }
@@ -86,7 +90,17 @@ impl Model2d {
         }
         let materials = profile.material_names().to_vec();
         let rebounds = runs.iter().any(|r| r.rebound_height_m.is_some());
-        Ok(Model2d { runs, group_names, profile, materials, options, release_attempts: 1, rebounds, files: None })
+        Ok(Model2d {
+            runs,
+            group_names,
+            profile,
+            materials,
+            options,
+            release_attempts: 1,
+            rebounds,
+            track_noise_m: None,
+            files: None,
+        })
     }
 
     /// The model measuring every simulated path's rebound height, or not (by default: if a run is tracked).
@@ -283,10 +297,11 @@ impl Model2d {
 impl Prepared for Prepared2d<'_> {
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
         let profile = self.slope.profile();
-        let mut obs = PathObserver2d::new(profile, self.model.rebounds);
+        let meter = self.model.rebounds.then(|| rebound_meter(self.model.track_noise_m, run, repeat, seed));
+        let mut obs = PathObserver2d::new(profile, meter);
         let r = simulate_run(&self.slope, &self.options, run, repeat, seed, &mut obs);
         let mut summary = obs.summary;
-        summary.rebound_height_m = obs.rebound.map_or(0.0, |r| r.height_m());
+        summary.rebound_height_m = obs.rebound.map_or(0.0, ReboundMeter::finish);
         let total: f64 = summary.material_fraction.iter().sum();
         if total > 0.0 {
             summary.slope_mean_deg /= total;
@@ -381,14 +396,13 @@ struct PathObserver2d<'a> {
     summary: PathSummary,
     thinner: PathThinner,
     /// The rebound height so far, if measured.
-    rebound: Option<Rebound>,
+    rebound: Option<ReboundMeter<'a>>,
 }
 
 impl<'a> PathObserver2d<'a> {
-    fn new(profile: &'a Profile, rebounds: bool) -> Self {
+    fn new(profile: &'a Profile, rebound: Option<ReboundMeter<'a>>) -> Self {
         let summary =
             PathSummary { material_fraction: vec![0.0; profile.material_names().len()], ..Default::default() };
-        let rebound = rebounds.then(Rebound::default);
         PathObserver2d { profile, summary, thinner: PathThinner::default(), rebound }
     }
 
@@ -430,8 +444,9 @@ impl PathObserver for PathObserver2d<'_> {
         if let Some(rebound) = &mut self.rebound {
             let steps = (piece.duration_s / 0.05).ceil().max(1.0) as usize;
             for i in 0..=steps {
-                let [x, z] = piece.position_at(piece.duration_s * i as f64 / steps as f64);
-                rebound.offer(self.profile.z_at(x).map_or(f64::NAN, |g| z - g));
+                let t = piece.duration_s * i as f64 / steps as f64;
+                let [x, z] = piece.position_at(t);
+                rebound.offer(piece.t0_s + t, self.profile.z_at(x).map_or(f64::NAN, |g| z - g));
             }
         }
     }
@@ -440,7 +455,8 @@ impl PathObserver for PathObserver2d<'_> {
         let e = piece.end_position();
         self.stretch(piece.x0_m, e[0]);
         if let Some(rebound) = &mut self.rebound {
-            rebound.offer(0.0);
+            rebound.offer(piece.t0_s, 0.0);
+            rebound.offer(piece.t0_s + piece.duration_s, 0.0);
         }
     }
 

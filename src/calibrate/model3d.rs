@@ -6,7 +6,7 @@ use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
-use super::rebound::{observed_rebound_m, Rebound};
+use super::rebound::{observed_rebound_m, rebound_meter, ReboundMeter};
 use super::runs::FieldRun;
 use super::scenario_file;
 use crate::campaign::Campaign;
@@ -36,6 +36,8 @@ pub struct Model3d {
     release_attempts: usize,
     /// Measure each simulated path's rebound height (only a tracked run needs it).
     rebounds: bool,
+    /// The tracking error's sd, m, when simulated paths are read as the tracks were (`track_noise_m`).
+    track_noise_m: Option<f64>,
     /// The campaign folder and the terrain as read, for [`Model::scenario_toml`] (`None` when built from parts).
     files: Option<(std::path::PathBuf, TerrainSpec)>,
 }
@@ -107,6 +109,7 @@ impl Model3d {
         }
         let mut model = Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)?
             .with_release_attempts(cfg.release_attempts);
+        model.track_noise_m = cfg.track_noise_m;
         model.files = Some((campaign.dir.clone(), spec));
         // The observed rebound of each tracked run, read on the same terrain as the simulated ones.
         for k in 0..model.runs.len() {
@@ -116,6 +119,7 @@ impl Model3d {
                     model.terrain.surface.height(p.x, p.y).map_or(f64::NAN, |z| p.z - z)
                 });
                 model.runs[k].rebound_height_m = Some(observed_rebound_m(&model.runs[k].id, heights)?);
+                model.runs[k].track_times_s = track.iter().map(|q| q.time_s - track[0].time_s).collect();
                 model.rebounds = true;
             }
         }
@@ -165,6 +169,7 @@ impl Model3d {
             median_mass_kg,
             release_attempts: 1,
             rebounds,
+            track_noise_m: None,
             files: None,
         })
     }
@@ -396,7 +401,8 @@ impl Prepared for Prepared3d<'_> {
         let v = terrain.up.to_internal(run.velocity_mps);
         let w = terrain.up.to_internal(run.spin_radps);
         let start = measured_release(terrain, body, p, v, w, &mut rng);
-        let mut obs = PathObserver3d::new(terrain, self.model.rebounds);
+        let meter = self.model.rebounds.then(|| rebound_meter(self.model.track_noise_m, run, repeat, seed));
+        let mut obs = PathObserver3d::new(terrain, meter);
         let out = simulate(terrain, body, start, &self.sim, &mut rng, &mut obs);
         let end = out.final_state.position_m;
         let d = end - start.position_m;
@@ -404,7 +410,7 @@ impl Prepared for Prepared3d<'_> {
         let o = terrain.origin;
         let path = obs.thinner.finish(end.x + o.x, end.y + o.y);
         let mut summary = obs.summary;
-        summary.rebound_height_m = obs.rebound.map_or(0.0, |r| r.height_m());
+        summary.rebound_height_m = obs.rebound.map_or(0.0, ReboundMeter::finish);
         let total = summary.material_fraction.iter().sum::<f64>();
         if total > 0.0 {
             summary.slope_mean_deg /= total;
@@ -443,13 +449,12 @@ struct PathObserver3d<'a> {
     summary: PathSummary,
     thinner: PathThinner,
     /// The rebound height so far, if measured.
-    rebound: Option<Rebound>,
+    rebound: Option<ReboundMeter<'a>>,
 }
 
 impl<'a> PathObserver3d<'a> {
-    fn new(terrain: &'a Terrain, rebounds: bool) -> Self {
+    fn new(terrain: &'a Terrain, rebound: Option<ReboundMeter<'a>>) -> Self {
         let summary = PathSummary { material_fraction: vec![0.0; terrain.materials.len()], ..Default::default() };
-        let rebound = rebounds.then(Rebound::default);
         PathObserver3d { terrain, last: None, summary, thinner: PathThinner::default(), rebound }
     }
 }
@@ -460,7 +465,7 @@ impl Observer for PathObserver3d<'_> {
         let o = self.terrain.origin;
         self.thinner.offer(x.x + o.x, x.y + o.y, 1.0);
         if let Some(rebound) = &mut self.rebound {
-            rebound.offer(self.terrain.surface.height(x.x, x.y).map_or(f64::NAN, |z| x.z - z));
+            rebound.offer(s.t_s, self.terrain.surface.height(x.x, x.y).map_or(f64::NAN, |z| x.z - z));
         }
         if let Some(last) = self.last {
             let step = (x.x - last.x).hypot(x.y - last.y);

@@ -6,9 +6,14 @@
 //! first rebound counts from the impact, and later bounces from the lowest the rock has been, which is about its
 //! resting height once it has touched the ground. The same function reads a simulated path and a tracked one, so
 //! the two compare like for like. Noise on a tracked path raises it (by a median 0.13 m for Gaussian noise of sd
-//! 0.1 m on every point of a 52-point path; docs/calibration.md, "Tracked paths").
+//! 0.1 m on every point of a 52-point path; docs/calibration.md, "Tracked paths"). With the tracking noise declared
+//! (`track_noise_m`), a simulated path is measured as its run's track was ([`ReboundMeter::at_track_times`]): at the
+//! track's own times, each height plus noise of that sd, so the noise raises both alike (ours: a forward model of
+//! the tracking system, in place of smoothing the track).
 
+use super::runs::FieldRun;
 use crate::error::{Error, Result};
+use crate::random::{standard_normal, stream, Rng};
 
 /// Streams heights above the ground and keeps the largest rise over the lowest earlier height.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -38,6 +43,81 @@ impl Rebound {
         self.rise_m
     }
 }
+
+/// Measures a simulated path's rebound height: from every sample of the path, or as its run's track measured it.
+pub struct ReboundMeter<'a> {
+    rebound: Rebound,
+    track: Option<TrackSampling<'a>>,
+}
+
+/// The path read at the track's times, with the tracking noise.
+struct TrackSampling<'a> {
+    /// Times of the track's points since its first one (taken as the release), s, ascending.
+    times_s: &'a [f64],
+    /// The next of them to read.
+    next: usize,
+    /// The last sample offered: (time since release, s; height, m).
+    last: Option<(f64, f64)>,
+    noise_sd_m: f64,
+    rng: Rng,
+}
+
+impl<'a> ReboundMeter<'a> {
+    /// Every sample of the path counts, as it is.
+    pub fn every_sample() -> Self {
+        ReboundMeter { rebound: Rebound::default(), track: None }
+    }
+
+    /// The path is read at `times_s` (since the release; linear between samples, the resting height after the
+    /// path's end), each height plus Gaussian noise of sd `noise_sd_m` drawn from `rng`.
+    pub fn at_track_times(times_s: &'a [f64], noise_sd_m: f64, rng: Rng) -> Self {
+        let track = TrackSampling { times_s, next: 0, last: None, noise_sd_m, rng };
+        ReboundMeter { rebound: Rebound::default(), track: Some(track) }
+    }
+
+    /// Offers the path's height above the ground at `t_s` since the release, m (samples in time order).
+    pub fn offer(&mut self, t_s: f64, height_m: f64) {
+        let Some(tr) = &mut self.track else {
+            self.rebound.offer(height_m);
+            return;
+        };
+        let (t0, h0) = tr.last.unwrap_or((t_s, height_m));
+        while let Some(&tau) = tr.times_s.get(tr.next).filter(|&&tau| tau <= t_s) {
+            let h = if t_s > t0 && tau > t0 { h0 + (height_m - h0) * (tau - t0) / (t_s - t0) } else { h0 };
+            self.rebound.offer(h + tr.noise_sd_m * standard_normal(&mut tr.rng));
+            tr.next += 1;
+        }
+        tr.last = Some((t_s, height_m));
+    }
+
+    /// The rebound height of the path, m: the track's times after the path's end read its last height.
+    pub fn finish(mut self) -> f64 {
+        if let Some(tr) = &mut self.track {
+            let h = tr.last.map_or(f64::NAN, |l| l.1);
+            for _ in tr.next..tr.times_s.len() {
+                self.rebound.offer(h + tr.noise_sd_m * standard_normal(&mut tr.rng));
+            }
+        }
+        self.rebound.height_m()
+    }
+}
+
+/// The meter of simulation `repeat` of `run` under `seed`: at the run's track times with noise of sd
+/// `track_noise_m` if that is set and the run has a track, otherwise every sample. The noise has its own random
+/// stream, so the simulation draws the same numbers either way.
+pub fn rebound_meter(track_noise_m: Option<f64>, run: &FieldRun, repeat: usize, seed: u64) -> ReboundMeter<'_> {
+    match track_noise_m {
+        Some(sd) if !run.track_times_s.is_empty() => ReboundMeter::at_track_times(
+            &run.track_times_s,
+            sd,
+            stream(seed ^ TRACK_NOISE_SEED, super::model::stream_index(run.index, repeat)),
+        ),
+        _ => ReboundMeter::every_sample(),
+    }
+}
+
+/// Seeds the tracking-noise streams apart from the simulations' (`seed ^ this`).
+const TRACK_NOISE_SEED: u64 = 0x7472_6163_6b5f_6e6f;
 
 /// The rebound height of a sequence of heights above the ground, m.
 pub fn rebound_height_m(heights_m: impl IntoIterator<Item = f64>) -> f64 {
@@ -78,5 +158,36 @@ mod tests {
         assert_eq!(rebound_height_m([5.0, 4.0, 1.0, 0.2]), 0.0);
         // Off-terrain heights are skipped.
         assert!((rebound_height_m([f64::NAN, 2.0, 0.5, f64::INFINITY, 1.5]) - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_path_read_at_track_times_is_interpolated_and_rests_after_its_end() {
+        // Impact at t = 1 s (height 0), apex 2 m at t = 1.5 s, down again at 2 s; the track reads 0.25 s apart
+        // from the release to 3 s, without noise: the apex falls between samples of the path, not of the track.
+        let path = [(0.0, 5.0), (1.0, 0.0), (1.5, 2.0), (2.0, 0.0)];
+        let times: Vec<f64> = (0..=12).map(|i| 0.25 * i as f64).collect();
+        let mut m = ReboundMeter::at_track_times(&times, 0.0, crate::random::stream(1, 0));
+        for (t, h) in path {
+            m.offer(t, h);
+        }
+        assert!((m.finish() - 2.0).abs() < 1e-12);
+        // A track read only at 1.25 and 1.75 s sees half the apex (linear between the path's samples).
+        let mut m = ReboundMeter::at_track_times(&[0.0, 1.0, 1.25, 1.75], 0.0, crate::random::stream(1, 0));
+        for (t, h) in path {
+            m.offer(t, h);
+        }
+        assert!((m.finish() - 1.0).abs() < 1e-12);
+        // Noise of sd 0.1 m on a path at rest after its impact: the largest rise of 40 noisy readings, about the
+        // range of 40 normal draws (≈ 4.5 sd), never read from the noise-free path (0).
+        let times: Vec<f64> = (0..40).map(|i| 0.1 * i as f64).collect();
+        let mut m = ReboundMeter::at_track_times(&times, 0.1, crate::random::stream(1, 0));
+        m.offer(0.0, 0.0);
+        let rise = m.finish();
+        assert!(rise > 0.2 && rise < 0.8, "{rise}");
+        let mut m = ReboundMeter::every_sample();
+        for (t, h) in path {
+            m.offer(t, h);
+        }
+        assert_eq!(m.finish(), 2.0);
     }
 }

@@ -617,6 +617,28 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             writeln!(s, "- **{}** kept: {}", e.label, e.evidence.get("formula").and_then(|v| v.as_str()).unwrap_or(""));
         let params: Vec<String> = e.parameters.iter().map(|(k, v)| format!("{k} = {v:.4}")).collect();
         let _ = writeln!(s, "  parameters: {}", params.join(", "));
+        let rivals: Vec<String> = e.evidence["rivals"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .map(|r| {
+                format!(
+                    "{} ({:+.1} %, {} added parameters{})",
+                    r["label"].as_str().unwrap_or(""),
+                    -100.0 * r["relative_improvement"].as_f64().unwrap_or(f64::NAN),
+                    r["added_parameters"],
+                    if r["within_one_se_of_best"].as_bool() == Some(true) { ", within one SE of the best" } else { "" }
+                )
+            })
+            .collect();
+        if !rivals.is_empty() {
+            let _ = writeln!(
+                s,
+                "  also passed, not kept ({}): {}",
+                e.evidence["selection"].as_str().unwrap_or(""),
+                rivals.join("; ")
+            );
+        }
     }
     if !r.effects_tried.is_empty() {
         let _ = writeln!(

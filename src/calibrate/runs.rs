@@ -41,6 +41,8 @@ pub struct FieldRun {
     pub group: usize,
     /// Observed rebound height ([`super::rebound`]) from the run's tracked path, m; `None` without one.
     pub rebound_height_m: Option<f64>,
+    /// Times of the run's tracked points since the first, s (empty without a track).
+    pub track_times_s: Vec<f64>,
 }
 
 impl FieldRun {
@@ -92,6 +94,7 @@ pub fn field_runs(campaign: &Campaign, group_link_m: f64) -> Result<(Vec<FieldRu
             runout_m: dep.runout_m,
             group: 0,
             rebound_height_m: None,
+            track_times_s: Vec::new(),
         });
     }
     if runs.len() < 6 {

@@ -290,6 +290,7 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
                     runout_m: 0.0,
                     group: 0,
                     rebound_height_m: None,
+                    track_times_s: Vec::new(),
                 });
             }
         }
@@ -544,6 +545,7 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
                     runout_m: 0.0,
                     group: 0,
                     rebound_height_m: None,
+                    track_times_s: Vec::new(),
                 });
             }
         }

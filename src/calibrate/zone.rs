@@ -336,6 +336,7 @@ mod tests {
                 runout_m: r,
                 group: i % 2,
                 rebound_height_m: None,
+                track_times_s: Vec::new(),
             })
             .collect();
         let sims = simulated
