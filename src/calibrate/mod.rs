@@ -145,6 +145,11 @@ pub fn calibrate(
             "{tracked} calibration runs were tracked: each one's rebound-height CRPS counts {:.1} m of run-out",
             cfg.rebound_weight.unwrap_or(0.0)
         ));
+        if let Some(sd) = cfg.track_noise_m {
+            log(&format!("simulated paths are read at the tracks' times with {sd} m of tracking noise"));
+        }
+    } else if cfg.track_noise_m.is_some() {
+        log("note: track_noise_m is set but no calibration run is tracked (observed_trajectories.csv): it is unused");
     }
     let cfg = &cfg;
     let ctx = Context::new(model, cfg, log);

@@ -538,6 +538,20 @@ mod tests {
             (0..4).map(|k| m.prepare(&c).unwrap().simulate(run, k, 3).summary.rebound_height_m).fold(0.0, f64::max)
         };
         assert!(rebound(&model) > 0.0 && rebound(&untracked) == 0.0);
+        // With the tracking noise declared (here 0) a simulated path is read at the track's four times only: it
+        // never rebounds higher than read at every sample, and the simulation itself is unchanged.
+        let read_cfg = CalibrationConfig { track_noise_m: Some(0.0), ..cfg.clone() };
+        let (runs, groups) = field_runs(&campaign, cfg.group_link_m).unwrap();
+        let read = Model3d::new(&campaign, runs, groups, &terrain_file, &read_cfg, "test").unwrap();
+        let (every, at_times) = (model.prepare(&c).unwrap(), read.prepare(&c).unwrap());
+        let mut lower = 0;
+        for k in 0..4 {
+            let (a, b) = (every.simulate(run, k, 3), at_times.simulate(run, k, 3));
+            assert!(b.summary.rebound_height_m <= a.summary.rebound_height_m + 1e-9);
+            assert_eq!(a.runout_m, b.runout_m);
+            lower += usize::from(b.summary.rebound_height_m < a.summary.rebound_height_m - 1e-6);
+        }
+        assert!(lower > 0, "four readings in 1.5 s should miss some apex");
         // A track without y_m lies at y = 0, off this terrain: an error naming the file and the run.
         let no_y = format!("trajectory_id,time_s,x_m,z_m\n{0},0,{x0},1500\n{0},1,{x0},1490\n", first.id);
         std::fs::write(dir.path().join("observed_trajectories.csv"), no_y).unwrap();
