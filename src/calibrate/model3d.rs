@@ -9,7 +9,7 @@ use super::params::{apply_mobility_3d, Candidate, Params, Region};
 use super::rebound::{observed_rebound_m, rebound_meter, ReboundMeter};
 use super::runs::FieldRun;
 use super::scenario_file;
-use crate::campaign::Campaign;
+use crate::campaign::{Campaign, TrackPoint};
 use crate::error::{Error, Result};
 use crate::random::{stream, TruncNormal};
 use crate::raster::Grid;
@@ -391,8 +391,44 @@ impl Model3d {
     }
 }
 
+impl Model3d {
+    /// The path of simulation `repeat` of `run` under `seed` with `candidate`: the engine's path samples (time since
+    /// release, centre of mass in the campaign's frame), the same simulation as [`Prepared::simulate`]'s.
+    ///
+    /// # Errors
+    /// The candidate cannot be realised.
+    pub fn track(&self, candidate: &Candidate, run: &FieldRun, repeat: usize, seed: u64) -> Result<Vec<TrackPoint>> {
+        let (terrain, sim, _) = self.realize(candidate)?;
+        let prepared = Prepared3d { model: self, terrain, sim };
+        let mut rec = PathRecorder3d { terrain: &prepared.terrain, points: Vec::new() };
+        prepared.simulate_observed(run, repeat, seed, &mut rec);
+        Ok(rec.points)
+    }
+}
+
+/// Records the path samples of a simulation in the campaign's frame.
+struct PathRecorder3d<'a> {
+    terrain: &'a Terrain,
+    points: Vec<TrackPoint>,
+}
+
+impl Observer for PathRecorder3d<'_> {
+    fn sample(&mut self, s: &Sample) {
+        if self.points.last().is_none_or(|q| s.t_s > q.time_s) {
+            self.points.push(TrackPoint { time_s: s.t_s, position_m: self.terrain.to_file_frame(&s.position_m) });
+        }
+    }
+}
+
 impl Prepared for Prepared3d<'_> {
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
+        self.simulate_observed(run, repeat, seed, &mut ())
+    }
+}
+
+impl Prepared3d<'_> {
+    /// [`Prepared::simulate`], with `extra` watching the engine too.
+    fn simulate_observed(&self, run: &FieldRun, repeat: usize, seed: u64, extra: &mut impl Observer) -> Sim {
         let model = self.model;
         let terrain = &self.terrain;
         let body = &model.bodies[&run.block_id];
@@ -403,7 +439,7 @@ impl Prepared for Prepared3d<'_> {
         let start = measured_release(terrain, body, p, v, w, &mut rng);
         let meter = self.model.rebounds.then(|| rebound_meter(self.model.track_noise_m, run, repeat, seed));
         let mut obs = PathObserver3d::new(terrain, meter);
-        let out = simulate(terrain, body, start, &self.sim, &mut rng, &mut obs);
+        let out = simulate(terrain, body, start, &self.sim, &mut rng, &mut (&mut obs, extra));
         let end = out.final_state.position_m;
         let d = end - start.position_m;
         let file_end = terrain.to_file_frame(&end);

@@ -117,6 +117,18 @@ pub trait Observer {
 
 impl Observer for () {}
 
+impl<O: Observer + ?Sized> Observer for &mut O {
+    fn sample(&mut self, s: &Sample) {
+        (**self).sample(s);
+    }
+    fn impact(&mut self, i: &Impact) {
+        (**self).impact(i);
+    }
+    fn barrier(&mut self, h: &BarrierHit) {
+        (**self).barrier(h);
+    }
+}
+
 impl<A: Observer, B: Observer> Observer for (A, B) {
     fn sample(&mut self, s: &Sample) {
         self.0.sample(s);

@@ -125,24 +125,30 @@ impl Terrain {
         material: Material,
         z: impl Fn(f64, f64) -> f64,
     ) -> crate::Result<Terrain> {
-        let mut v = Vec::with_capacity((n + 1) * (n + 1));
-        for j in 0..=n {
-            for i in 0..=n {
-                let (x, y) = (size_m * i as f64 / n as f64, size_m * j as f64 / n as f64);
-                v.push(Vector3::new(x, y, z(x, y)));
-            }
-        }
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut t = Vec::with_capacity(2 * n * n);
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
+        let (v, t) = grid_mesh(size_m, n, z);
         let mats = vec![0u16; t.len()];
         Terrain::from_local(v, &t, &mats, vec![material])
     }
+}
+
+/// The mesh of [`Terrain::from_function`]: nodes over [0, size]² every size/n, two triangles per cell.
+pub fn grid_mesh(size_m: f64, n: usize, z: impl Fn(f64, f64) -> f64) -> (Vec<Vector3<f64>>, Vec<[u32; 3]>) {
+    let mut v = Vec::with_capacity((n + 1) * (n + 1));
+    for j in 0..=n {
+        for i in 0..=n {
+            let (x, y) = (size_m * i as f64 / n as f64, size_m * j as f64 / n as f64);
+            v.push(Vector3::new(x, y, z(x, y)));
+        }
+    }
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut t = Vec::with_capacity(2 * n * n);
+    for j in 0..n {
+        for i in 0..n {
+            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    (v, t)
 }
 
 /// A horizontal point as the user gives it ((x, y) for z-up files, (x, z) for y-up ones) in the local frame.
