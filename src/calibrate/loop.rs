@@ -415,7 +415,6 @@ pub fn effects_loop(
     Ok(out)
 }
 
-/// Multiplies every material's (and zone's) mean restitution (Cr in 3DRB, Rn in 2DLM) by `f`, capped at 1.
 const SELECTION_ONE_SE: &str = "of the effects that pass, the one with the fewest added parameters whose out-of-fold \
     mean CRPS is within one standard error (of the per-run differences) of the best one's";
 const SELECTION_BEST: &str = "of the effects that pass, the one with the largest cut";
@@ -445,9 +444,8 @@ struct Pick {
 /// among the effects whose mean out-of-fold CRPS exceeds the best one's by at most the standard error of the
 /// per-run paired differences, the one with the fewest added parameters (ties: the larger cut). When two effects
 /// fit the calibration runs alike, the data do not choose between them, and the simpler one is kept; the others
-/// are reported as rivals.
-/// `arms`: each passing effect's per-run out-of-fold CRPS (the same runs in the same order) and its added
-/// parameters.
+/// are reported as rivals. `arms`: each passing effect's per-run out-of-fold CRPS (the same runs in the same order)
+/// and its added parameters.
 fn choose(arms: &[(&[f64], usize)], one_se_rule: bool) -> Option<Pick> {
     let means: Vec<f64> = arms.iter().map(|a| mean(a.0)).collect();
     let best = (0..arms.len()).min_by(|&a, &b| means[a].total_cmp(&means[b]))?;
@@ -469,6 +467,7 @@ fn choose(arms: &[(&[f64], usize)], one_se_rule: bool) -> Option<Pick> {
     Some(Pick { kept, within_one_se, simpler_than_best: kept != best })
 }
 
+/// Multiplies every material's (and zone's) mean restitution (Cr in 3DRB, Rn in 2DLM) by `f`, capped at 1.
 fn scale_cr(c: &mut Candidate, f: f64) {
     map_params(c, &[".cr_mean", ".rn_mean"], |v| (v * f).min(1.0));
 }

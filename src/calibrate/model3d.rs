@@ -389,9 +389,7 @@ impl Model3d {
         terrain.friction = terrain.materials.iter().map(|m| (m.mu_static(), m.mu_dynamic())).collect();
         Ok((terrain, sim, zones))
     }
-}
 
-impl Model3d {
     /// The path of simulation `repeat` of `run` under `seed` with `candidate`: the engine's path samples (time since
     /// release, centre of mass in the campaign's frame), the same simulation as [`Prepared::simulate`]'s.
     ///
