@@ -13,6 +13,7 @@ use super::model2d::Model2d;
 use super::model3d::Model3d;
 use super::params::{Candidate, EffectSpec, Params, Region};
 use super::runs::{assign_groups, FieldRun};
+use crate::campaign::TrackPoint;
 use crate::error::{Error, Result};
 use crate::lumped2d::{Options2d, Profile};
 use crate::random::{standard_normal, stream, uniform, TruncNormal};
@@ -590,18 +591,12 @@ pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path) -> Result<()> {
     }
     if spec.track_noise_m.is_some() {
         let truth = truth_2d(spec);
-        let mut csv = String::from("trajectory_id,time_s,x_m,z_m\n");
-        for r in model.runs() {
-            let mut last_ms = -1.0;
-            for p in model.track(&truth, r, 0, data_seed(spec.seed))? {
-                // Written to the millisecond: a point closer in time to the last one written is left out.
-                let ms = (p.time_s * 1000.0).round();
-                if ms > last_ms {
-                    csv += &format!("{},{:.3},{:.3},{:.3}\n", r.id, ms / 1000.0, p.position_m[0], p.position_m[2]);
-                    last_ms = ms;
-                }
-            }
-        }
+        let csv = tracks_csv(
+            "trajectory_id,time_s,x_m,z_m",
+            model.runs(),
+            |r| model.track(&truth, r, 0, data_seed(spec.seed)),
+            |p| format!("{:.3},{:.3}", p[0], p[2]),
+        )?;
         crate::io::write_bytes_atomic(&dir.join("observed_trajectories.csv"), csv.as_bytes())?;
     }
     synthetic_profile(&spec.profile)?.write_csv(&dir.join("profile.csv"))
@@ -637,29 +632,19 @@ pub fn write_terrain_campaign(spec: &Synthetic3d, dir: &Path, track_point_noise_
     }
     let mut files =
         vec![("release_points.csv", release), ("observed_deposition.csv", rest), ("block_metadata.csv", block_csv)];
-    if let ShapeKind::Hull { points, .. } = boulder() {
-        if spec.shape == "boulder" {
-            let rows: Vec<String> = points.iter().map(|p| p.map(|v| v.to_string()).join(",")).collect();
-            files.push(("boulder.csv", format!("x,y,z\n{}\n", rows.join("\n"))));
-        }
+    if let (true, ShapeKind::Hull { points, .. }) = (spec.shape == "boulder", boulder()) {
+        let rows: Vec<String> = points.iter().map(|p| p.map(|v| v.to_string()).join(",")).collect();
+        files.push(("boulder.csv", format!("x,y,z\n{}\n", rows.join("\n"))));
     }
     if spec.track_noise_m.is_some() {
         let truth = truth_3d(spec);
         let mut rng = stream(spec.seed, 13);
-        let mut csv = String::from("trajectory_id,time_s,x_m,y_m,z_m\n");
-        for r in model.runs() {
-            let mut last_ms = -1.0;
-            for p in model.track(&truth, r, 0, data_seed(spec.seed))? {
-                // Written to the millisecond: a point closer in time to the last one written is left out.
-                let ms = (p.time_s * 1000.0).round();
-                if ms > last_ms {
-                    let [x, y, z] = p.position_m;
-                    let z = z + track_point_noise_m * standard_normal(&mut rng);
-                    csv += &format!("{},{:.3},{x:.3},{y:.3},{z:.3}\n", r.id, ms / 1000.0);
-                    last_ms = ms;
-                }
-            }
-        }
+        let csv = tracks_csv(
+            "trajectory_id,time_s,x_m,y_m,z_m",
+            model.runs(),
+            |r| model.track(&truth, r, 0, data_seed(spec.seed)),
+            |[x, y, z]| format!("{x:.3},{y:.3},{:.3}", z + track_point_noise_m * standard_normal(&mut rng)),
+        )?;
         files.push(("observed_trajectories.csv", csv));
     }
     for (name, text) in files {
@@ -677,6 +662,28 @@ pub fn write_terrain_campaign(spec: &Synthetic3d, dir: &Path, track_point_noise_
         material_names: vec![String::new()],
     };
     crate::io::obj::write_obj(&dir.join("terrain.obj"), &mesh)
+}
+
+/// The `observed_trajectories.csv` text of `runs` under `header`: each run's path from `track`, to the millisecond
+/// (a point closer in time to the last one written is left out), its position written by `coords`.
+fn tracks_csv(
+    header: &str,
+    runs: &[FieldRun],
+    track: impl Fn(&FieldRun) -> Result<Vec<TrackPoint>>,
+    mut coords: impl FnMut([f64; 3]) -> String,
+) -> Result<String> {
+    let mut csv = format!("{header}\n");
+    for r in runs {
+        let mut last_ms = -1.0;
+        for p in track(r)? {
+            let ms = (p.time_s * 1000.0).round();
+            if ms > last_ms {
+                csv += &format!("{},{:.3},{}\n", r.id, ms / 1000.0, coords(p.position_m));
+                last_ms = ms;
+            }
+        }
+    }
+    Ok(csv)
 }
 
 /// Seed of the true simulations of a synthetic campaign of seed `seed` (apart from the calibration's own seeds).
