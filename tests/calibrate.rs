@@ -332,8 +332,14 @@ fn profile_loop_finds_a_hidden_soft_zone() {
 fn profile_loop_finds_hidden_speed_dependent_restitution() {
     // Rn falls with impact speed (Pfeiffer & Bowen with K = 10 m/s) on a bouncy slope with drops of 0.5 to 40 m.
     let r = profile_case("speed", 1);
-    let k = named_with_cut(&r, "speed_restitution").parameters["speed_restitution.k_mps"];
+    let e = named_with_cut(&r, "speed_restitution");
+    let k = e.parameters["speed_restitution.k_mps"];
     assert!((5.0..20.0).contains(&k), "K {k} m/s, hidden 10");
+    // A zone passes too (four parameters, more than one standard error behind): reported as a rival.
+    let rivals = e.evidence["rivals"].as_array().unwrap();
+    assert!(rivals.iter().any(|v| v["label"] == "zone1" && v["within_one_se_of_best"] == false), "{rivals:?}");
+    let md = talus::calibrate::report::markdown(&r, &[], &[], None);
+    assert!(md.contains("also passed, not kept") && md.contains("zone1 ("), "{md}");
 }
 
 #[test]
