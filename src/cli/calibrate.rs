@@ -161,7 +161,16 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         if r.effects_added.is_empty() {
             "none".to_string()
         } else {
-            r.effects_added.iter().map(|e| e.label.clone()).collect::<Vec<_>>().join(", ")
+            let with_rivals = |e: &calibrate::effects_loop::AddedEffect| {
+                let rivals: Vec<&str> =
+                    e.evidence["rivals"].as_array().into_iter().flatten().filter_map(|v| v["label"].as_str()).collect();
+                if rivals.is_empty() {
+                    e.label.clone()
+                } else {
+                    format!("{} (also passed: {})", e.label, rivals.join(", "))
+                }
+            };
+            r.effects_added.iter().map(with_rivals).collect::<Vec<_>>().join(", ")
         }
     );
     let (set, b, f) = if hold.is_empty() {
