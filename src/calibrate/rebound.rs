@@ -162,8 +162,8 @@ mod tests {
 
     #[test]
     fn a_path_read_at_track_times_is_interpolated_and_rests_after_its_end() {
-        // Impact at t = 1 s (height 0), apex 2 m at t = 1.5 s, down again at 2 s; the track reads 0.25 s apart
-        // from the release to 3 s, without noise: the apex falls between samples of the path, not of the track.
+        // Impact at t = 1 s (height 0), apex 2 m at t = 1.5 s, down again at 2 s. A track read every 0.25 s from
+        // the release to 3 s, without noise, reads the apex (1.5 s is one of its times).
         let path = [(0.0, 5.0), (1.0, 0.0), (1.5, 2.0), (2.0, 0.0)];
         let times: Vec<f64> = (0..=12).map(|i| 0.25 * i as f64).collect();
         let mut m = ReboundMeter::at_track_times(&times, 0.0, crate::random::stream(1, 0));
