@@ -6,7 +6,7 @@ use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
-use super::rebound::{observed_rebound_m, rebound_meter, ReboundMeter};
+use super::rebound::{attach_track, rebound_meter, ReboundMeter};
 use super::runs::FieldRun;
 use super::scenario_file;
 use crate::campaign::{Campaign, TrackPoint};
@@ -56,8 +56,7 @@ impl Model2d {
                 let profile = &model.profile;
                 let heights =
                     track.iter().map(|q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z));
-                r.rebound_height_m = Some(observed_rebound_m(&r.id, heights)?);
-                r.track_times_s = track.iter().map(|q| q.time_s - track[0].time_s).collect();
+                attach_track(r, track, heights.collect())?;
                 model.rebounds = true;
             }
         }

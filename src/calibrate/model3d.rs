@@ -6,7 +6,7 @@ use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
-use super::rebound::{observed_rebound_m, rebound_meter, ReboundMeter};
+use super::rebound::{attach_track, rebound_meter, ReboundMeter};
 use super::runs::FieldRun;
 use super::scenario_file;
 use crate::campaign::{Campaign, TrackPoint};
@@ -114,12 +114,14 @@ impl Model3d {
         // The observed rebound of each tracked run, read on the same terrain as the simulated ones.
         for k in 0..model.runs.len() {
             if let Some(track) = campaign.tracks.get(&model.runs[k].id) {
-                let heights = track.iter().map(|q| {
-                    let p = model.local(q.position_m);
-                    model.terrain.surface.height(p.x, p.y).map_or(f64::NAN, |z| p.z - z)
-                });
-                model.runs[k].rebound_height_m = Some(observed_rebound_m(&model.runs[k].id, heights)?);
-                model.runs[k].track_times_s = track.iter().map(|q| q.time_s - track[0].time_s).collect();
+                let heights = track
+                    .iter()
+                    .map(|q| {
+                        let p = model.local(q.position_m);
+                        model.terrain.surface.height(p.x, p.y).map_or(f64::NAN, |z| p.z - z)
+                    })
+                    .collect();
+                attach_track(&mut model.runs[k], track, heights)?;
                 model.rebounds = true;
             }
         }

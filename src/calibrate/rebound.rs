@@ -12,6 +12,7 @@
 //! the tracking system, in place of smoothing the track).
 
 use super::runs::FieldRun;
+use crate::campaign::TrackPoint;
 use crate::error::{Error, Result};
 use crate::random::{standard_normal, stream, Rng};
 
@@ -128,21 +129,23 @@ pub fn rebound_height_m(heights_m: impl IntoIterator<Item = f64>) -> f64 {
     r.height_m()
 }
 
-/// The rebound height of run `run_id`'s tracked path from its heights above the ground (non-finite where a point is
-/// off the terrain or profile), m.
+/// Gives `run` its tracked path: the observed rebound height from the heights of the track's points above the
+/// ground (`heights_m`, one per point, non-finite where a point is off the terrain or profile) and the track's times
+/// since its first point ([`ReboundMeter::at_track_times`]).
 ///
 /// # Errors
 /// No point of the path lies over the terrain: the track is in another frame, or lacks `y_m`.
-pub fn observed_rebound_m(run_id: &str, heights_m: impl IntoIterator<Item = f64>) -> Result<f64> {
-    let heights_m: Vec<f64> = heights_m.into_iter().collect();
+pub fn attach_track(run: &mut FieldRun, track: &[TrackPoint], heights_m: Vec<f64>) -> Result<()> {
     if !heights_m.iter().any(|h| h.is_finite()) {
         return Err(Error::invalid(
-            format!("observed_trajectories.csv, run {run_id}"),
+            format!("observed_trajectories.csv, run {}", run.id),
             "no tracked point lies over the terrain",
             "give the track in the frame of release_points.csv, with y_m on a 3D terrain",
         ));
     }
-    Ok(rebound_height_m(heights_m))
+    run.rebound_height_m = Some(rebound_height_m(heights_m));
+    run.track_times_s = track.iter().map(|q| q.time_s - track[0].time_s).collect();
+    Ok(())
 }
 
 #[cfg(test)]
