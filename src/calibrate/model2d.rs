@@ -348,17 +348,22 @@ fn simulate_run(
 }
 
 impl Model2d {
-    /// The path of `run` under `candidate` (the same path as its simulation with `repeat` and `seed`), as a tracked
-    /// path of `observed_trajectories.csv` gives it: the centre every 0.05 s of each flight and at both ends of each
-    /// slide. Synthetic campaigns written to disk use it.
+    /// The path of every run under `candidate` (the same path as its simulation with `repeat` and `seed`), as a
+    /// tracked path of `observed_trajectories.csv` gives it: the centre every 0.05 s of each flight and at both ends
+    /// of each slide. Synthetic campaigns written to disk use it.
     ///
     /// # Errors
     /// The candidate does not fit the model.
-    pub fn track(&self, candidate: &Candidate, run: &FieldRun, repeat: usize, seed: u64) -> Result<Vec<TrackPoint>> {
+    pub fn tracks(&self, candidate: &Candidate, repeat: usize, seed: u64) -> Result<Vec<Vec<TrackPoint>>> {
         let (profile, mats, options, _) = self.realize(candidate)?;
         let slope = Slope2d::new(profile, mats)?;
+        Ok(self.runs.iter().map(|run| Self::track(&slope, &options, run, repeat, seed)).collect())
+    }
+
+    /// The path of one run on `slope` (see [`Model2d::tracks`]).
+    fn track(slope: &Slope2d, options: &Options2d, run: &FieldRun, repeat: usize, seed: u64) -> Vec<TrackPoint> {
         let mut rec = PathRecorder::default();
-        simulate_run(&slope, &options, run, repeat, seed, &mut rec);
+        simulate_run(slope, options, run, repeat, seed, &mut rec);
         let mut track: Vec<TrackPoint> = Vec::new();
         for piece in &rec.pieces {
             let samples: Vec<(f64, [f64; 2])> = match piece {
@@ -377,7 +382,7 @@ impl Model2d {
                 }
             }
         }
-        Ok(track)
+        track
     }
 }
 

@@ -392,17 +392,20 @@ impl Model3d {
         Ok((terrain, sim, zones))
     }
 
-    /// The path of simulation `repeat` of `run` under `seed` with `candidate`: the engine's path samples (time since
-    /// release, centre of mass in the campaign's frame), the same simulation as [`Prepared::simulate`]'s.
+    /// The path of simulation `repeat` of every run under `seed` with `candidate`: the engine's path samples (time
+    /// since release, centre of mass in the campaign's frame), the same simulations as [`Prepared::simulate`]'s.
     ///
     /// # Errors
     /// The candidate cannot be realised.
-    pub fn track(&self, candidate: &Candidate, run: &FieldRun, repeat: usize, seed: u64) -> Result<Vec<TrackPoint>> {
+    pub fn tracks(&self, candidate: &Candidate, repeat: usize, seed: u64) -> Result<Vec<Vec<TrackPoint>>> {
         let (terrain, sim, _) = self.realize(candidate)?;
         let prepared = Prepared3d { model: self, terrain, sim };
-        let mut rec = PathRecorder3d { terrain: &prepared.terrain, points: Vec::new() };
-        prepared.simulate_observed(run, repeat, seed, &mut rec);
-        Ok(rec.points)
+        let track = |run: &FieldRun| {
+            let mut rec = PathRecorder3d { terrain: &prepared.terrain, points: Vec::new() };
+            prepared.simulate_observed(run, repeat, seed, &mut rec);
+            rec.points
+        };
+        Ok(self.runs.iter().map(track).collect())
     }
 }
 

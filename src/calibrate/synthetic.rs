@@ -591,12 +591,9 @@ pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path) -> Result<()> {
     }
     if spec.track_noise_m.is_some() {
         let truth = truth_2d(spec);
-        let csv = tracks_csv(
-            "trajectory_id,time_s,x_m,z_m",
-            model.runs(),
-            |r| model.track(&truth, r, 0, data_seed(spec.seed)),
-            |p| format!("{:.3},{:.3}", p[0], p[2]),
-        )?;
+        let tracks = model.tracks(&truth, 0, data_seed(spec.seed))?;
+        let csv =
+            tracks_csv("trajectory_id,time_s,x_m,z_m", model.runs(), &tracks, |p| format!("{:.3},{:.3}", p[0], p[2]));
         crate::io::write_bytes_atomic(&dir.join("observed_trajectories.csv"), csv.as_bytes())?;
     }
     synthetic_profile(&spec.profile)?.write_csv(&dir.join("profile.csv"))
@@ -639,12 +636,10 @@ pub fn write_terrain_campaign(spec: &Synthetic3d, dir: &Path, track_point_noise_
     if spec.track_noise_m.is_some() {
         let truth = truth_3d(spec);
         let mut rng = stream(spec.seed, 13);
-        let csv = tracks_csv(
-            "trajectory_id,time_s,x_m,y_m,z_m",
-            model.runs(),
-            |r| model.track(&truth, r, 0, data_seed(spec.seed)),
-            |[x, y, z]| format!("{x:.3},{y:.3},{:.3}", z + track_point_noise_m * standard_normal(&mut rng)),
-        )?;
+        let tracks = model.tracks(&truth, 0, data_seed(spec.seed))?;
+        let csv = tracks_csv("trajectory_id,time_s,x_m,y_m,z_m", model.runs(), &tracks, |[x, y, z]| {
+            format!("{x:.3},{y:.3},{:.3}", z + track_point_noise_m * standard_normal(&mut rng))
+        });
         files.push(("observed_trajectories.csv", csv));
     }
     for (name, text) in files {
@@ -664,18 +659,18 @@ pub fn write_terrain_campaign(spec: &Synthetic3d, dir: &Path, track_point_noise_
     crate::io::obj::write_obj(&dir.join("terrain.obj"), &mesh)
 }
 
-/// The `observed_trajectories.csv` text of `runs` under `header`: each run's path from `track`, to the millisecond
+/// The `observed_trajectories.csv` text of `runs` under `header`: each run's path in `tracks`, to the millisecond
 /// (a point closer in time to the last one written is left out), its position written by `coords`.
 fn tracks_csv(
     header: &str,
     runs: &[FieldRun],
-    track: impl Fn(&FieldRun) -> Result<Vec<TrackPoint>>,
+    tracks: &[Vec<TrackPoint>],
     mut coords: impl FnMut([f64; 3]) -> String,
-) -> Result<String> {
+) -> String {
     let mut csv = format!("{header}\n");
-    for r in runs {
+    for (r, track) in runs.iter().zip(tracks) {
         let mut last_ms = -1.0;
-        for p in track(r)? {
+        for p in track {
             let ms = (p.time_s * 1000.0).round();
             if ms > last_ms {
                 csv += &format!("{},{:.3},{}\n", r.id, ms / 1000.0, coords(p.position_m));
@@ -683,7 +678,7 @@ fn tracks_csv(
             }
         }
     }
-    Ok(csv)
+    csv
 }
 
 /// Seed of the true simulations of a synthetic campaign of seed `seed` (apart from the calibration's own seeds).
