@@ -1,13 +1,14 @@
 //! Synthetic-effect study of `talus calibrate` (issue 5): campaigns made with talus itself with an effect switched
-//! on (speed-dependent restitution, restitution scaling with block mass, a soft zone), plus controls without one,
-//! calibrated with the effect undeclared. Writes `outputs/calibration_study/summary.json` (and one line per case
-//! on stdout; a case run again replaces its row, the others keep theirs), and a full report per case.
+//! on (speed-dependent restitution, restitution scaling with block mass, a drag that holds light blocks back, a
+//! soft zone), plus controls without one, calibrated with the effect undeclared. Writes
+//! `outputs/calibration_study/summary.json` (and one line per case on stdout; a case run again replaces its row, the
+//! others keep theirs), and a full report per case.
 //!
-//! Run: cargo run --release --example calibration_study [-- CASE ...]   (cases: speed speed_mixed size zone rough
-//! speed_tracked speed_mixed_tracked size_tracked speed_2 speed_3 speed_tracked_2 speed_tracked_3 control_a_N
-//! control_b_N control_c_N control_d_N control_a_tracked_N control_d_tracked_N 2d_speed 2d_speed_tracked
-//! 2d_control_a_tracked_N 2d_size 2d_zone 2d_control_a_N 2d_control_b_N, N = 1..3, a trailing * matches a prefix;
-//! default: all)
+//! Run: cargo run --release --example calibration_study [-- CASE ...]   (cases: speed speed_mixed size size_drag
+//! zone rough speed_tracked speed_mixed_tracked size_tracked speed_2 speed_3 speed_tracked_2 speed_tracked_3
+//! control_a_N control_b_N control_c_N control_d_N control_e_N control_a_tracked_N control_d_tracked_N 2d_speed
+//! 2d_speed_tracked 2d_control_a_tracked_N 2d_size 2d_zone 2d_control_a_N 2d_control_b_N, N = 1..3, a trailing *
+//! matches a prefix; default: all)
 use std::time::Instant;
 use talus::calibrate::synthetic::{case_2d, case_3d, synthetic_2d, synthetic_3d, zone_overlap, Hidden};
 use talus::calibrate::{self, params::Region, split, CalibrationConfig, Model};
@@ -32,17 +33,28 @@ fn main() {
     let seeds = [1u64, 2, 3];
     // The effect cases on data seed 1 (`NAME`), and the speed case with and without tracks on seeds 2 and 3 as well
     // (`NAME_2`, `NAME_3`).
-    let effect_cases =
-        ["speed", "speed_mixed", "size", "zone", "rough", "speed_tracked", "speed_mixed_tracked", "size_tracked"]
-            .into_iter()
-            .map(|n| (n.to_string(), n, 1))
-            .chain(["speed", "speed_tracked"].into_iter().flat_map(|n| [2, 3].map(|s| (format!("{n}_{s}"), n, s))));
+    let effect_cases = [
+        "speed",
+        "speed_mixed",
+        "size",
+        "size_drag",
+        "zone",
+        "rough",
+        "speed_tracked",
+        "speed_mixed_tracked",
+        "size_tracked",
+    ]
+    .into_iter()
+    .map(|n| (n.to_string(), n, 1))
+    .chain(["speed", "speed_tracked"].into_iter().flat_map(|n| [2, 3].map(|s| (format!("{n}_{s}"), n, s))));
     for (label, name, seed) in effect_cases {
         let spec = case_3d(name, seed).unwrap();
         let hidden = spec.hidden.clone();
         cases.push((label, Box::new(move || Box::new(synthetic_3d(&spec, SimParams::default()).unwrap())), hidden));
     }
-    for base in ["control_a", "control_b", "control_c", "control_d", "control_a_tracked", "control_d_tracked"] {
+    for base in
+        ["control_a", "control_b", "control_c", "control_d", "control_e", "control_a_tracked", "control_d_tracked"]
+    {
         for s in seeds {
             let spec = case_3d(base, s).unwrap();
             cases.push((

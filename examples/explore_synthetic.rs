@@ -4,10 +4,10 @@
 //! with a ratio above 0.7 cannot show a 30 % cut however good the loop is.
 //!
 //! Run: cargo run --release --example explore_synthetic [-- NAME ...]   (2d_control_a 2d_control_b 2d_speed_steep
-//! 2d_speed 2d_size 2d_zone speed speed_mixed size zone control_a control_b control_c control_d 3d_designs;
-//! mixed_designs [rivals] [DESIGN ...]; tracks [speed speed_mixed thrown3]; crps_noise; track_noise; default: all
-//! but 3d_designs, mixed_designs, tracks, crps_noise and track_noise; the 3DRB ones take about a minute each on 2
-//! cores, 3d_designs 15 minutes, mixed_designs 7 minutes, tracks 4 minutes a design)
+//! 2d_speed 2d_size 2d_zone speed speed_mixed size size_drag zone control_a control_b control_c control_d control_e
+//! 3d_designs; mixed_designs [rivals] [DESIGN ...]; tracks [speed speed_mixed thrown3]; crps_noise; track_noise;
+//! default: all but 3d_designs, mixed_designs, tracks, crps_noise and track_noise; the 3DRB ones take about a minute
+//! each on 2 cores, 3d_designs 15 minutes, mixed_designs 7 minutes, tracks 4 minutes a design)
 use talus::calibrate::config::Objective;
 use talus::calibrate::effects::{EffectKind, MOBILITY_GRID};
 use talus::calibrate::metrics::metrics;
@@ -315,6 +315,11 @@ fn main() {
         //   0.5, 10 and 25 m at 1-2 m/s onto the face: 1.00, 0.98.
         // - The size effect: `size_boulder` (the `size` design with boulders) 0.72; `size_06` (the `size` cubes
         //   with β = 0.6) 0.90; `size_boulder_06` 0.69; `size` itself 0.71.
+        // - A size effect through resistance (2026-11-25, `Hidden::VegetationDrag`, a drag −C v in contact): on the
+        //   `size` cubes C = 5, 15, 40 kg/s give 1.07, 1.11, 0.99, on its boulders C = 15 kg/s 0.99; on the
+        //   `control_c` plain (8°) the boulders roll off the terrain whatever the drag (C = 5, 15: 1.07, 1.05);
+        //   on a level plain (`control_e`: 1.03) C = 20, 50, 200, 500 kg/s give 0.98, 1.00, 0.47, 0.34. The
+        //   `size_drag` case takes C = 200 kg/s.
         // Untied from place, speed-dependent restitution moves run-outs no more than one Cr and friction pair can:
         // the effect kills the bounce of fast impacts, and a lower Cr or a higher friction shortens them as much.
         let base = case_3d("speed_mixed", 1).unwrap();
@@ -347,8 +352,8 @@ fn main() {
             ("bench8", bench(8.0)),
             ("bench12", bench(12.0)),
             ("size_boulder", size_boulder.clone()),
-            ("size_06", Synthetic3d { hidden: Hidden::MassRestitution(-0.6), ..size }),
-            ("size_boulder_06", Synthetic3d { hidden: Hidden::MassRestitution(-0.6), ..size_boulder }),
+            ("size_06", Synthetic3d { hidden: Hidden::MassRestitution(-0.6), ..size.clone() }),
+            ("size_boulder_06", Synthetic3d { hidden: Hidden::MassRestitution(-0.6), ..size_boulder.clone() }),
         ];
         // Only the designs named, if any are.
         let named = designs.iter().any(|(n, _)| args.iter().any(|a| a == n));
@@ -397,7 +402,18 @@ fn main() {
     if args.iter().any(|a| a == "track_noise") {
         track_noise();
     }
-    for name in ["speed", "speed_mixed", "size", "zone", "control_a", "control_b", "control_c", "control_d"] {
+    for name in [
+        "speed",
+        "speed_mixed",
+        "size",
+        "size_drag",
+        "zone",
+        "control_a",
+        "control_b",
+        "control_c",
+        "control_d",
+        "control_e",
+    ] {
         if want(name) {
             report(name, &case_3d(name, 1).unwrap());
         }

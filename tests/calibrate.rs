@@ -4,8 +4,10 @@
 use talus::calibrate::config::{CalibrationConfig, ModelKind, Objective, ParamSetting};
 use talus::calibrate::crossval::fold_assignment;
 use talus::calibrate::fit::{with_unit, SearchRecord};
+use talus::calibrate::metrics::metrics;
+use talus::calibrate::model::evaluate;
 use talus::calibrate::params::Region;
-use talus::calibrate::synthetic::{case_2d, synthetic_2d, synthetic_3d, Synthetic2d, Synthetic3d, TRUE_2D};
+use talus::calibrate::synthetic::{case_2d, synthetic_2d, synthetic_3d, truth_2d, Synthetic2d, Synthetic3d, TRUE_2D};
 use talus::calibrate::{base_candidate, calibrate, split, Model};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
@@ -344,12 +346,23 @@ fn profile_loop_finds_hidden_speed_dependent_restitution() {
 
 #[test]
 fn profile_loop_with_tracked_rebounds_finds_speed_dependent_restitution_and_fits_the_bounces() {
-    // The speed case with each run's rebound height observed (noise 0.1 m): the score weighs the rebounds too.
+    // The speed case with each run's path tracked every millisecond (height noise 0.1 m, declared): the score
+    // weighs the rebounds too.
     let r = profile_case("speed_tracked", 1);
     let k = named_with_cut(&r, "speed_restitution").parameters["speed_restitution.k_mps"];
     assert!((7.0..14.0).contains(&k), "K {k} m/s, hidden 10");
+    // The held-out rebounds are fitted about as well as the true model fits them (the noisy tracks set a floor).
+    let spec = case_2d("speed_tracked", 1).unwrap();
+    let model = synthetic_2d(&spec, Options2d::default()).unwrap();
+    let cfg = CalibrationConfig::default();
+    let (_, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+    let sims = evaluate(&model, &truth_2d(&spec), &hold, cfg.repeats, cfg.seed, 0).unwrap();
+    let truth = metrics(model.runs(), &sims).rebound_mae_m.unwrap();
     let (before, after) = (r.baseline.holdout.rebound_mae_m.unwrap(), r.final_stage.holdout.rebound_mae_m.unwrap());
-    assert!(after < 0.5 * before, "held-out rebound MAE {before:.3} -> {after:.3} m");
+    assert!(
+        after < 0.7 * before && after < 1.25 * truth,
+        "held-out rebound MAE {before:.3} -> {after:.3} m, truth {truth:.3}"
+    );
     assert!(r.settings.rebound_weight.is_some_and(|w| w > 0.0), "the default weight is set from the data");
     assert!(r.diagnostics.iter().any(|d| d.residual == "rebound"), "the rebound residual is diagnosed");
 }

@@ -16,6 +16,7 @@ use crate::lumped2d::{
     PathRecorder, Profile, RockStart2d, Rotation, SlidePiece, Slope2d, StopReason, PFEIFFER_BOWEN_MPS,
 };
 use crate::random::{stream, TruncNormal};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// The 2DLM engine bound to a profile campaign.
@@ -48,19 +49,8 @@ impl Model2d {
         let profile = Profile::from_csv_path(profile_file)?;
         let mut model = Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
             .with_release_attempts(cfg.release_attempts);
-        model.track_noise_m = cfg.track_noise_m;
         model.files = Some((campaign.dir.clone(), profile_file.to_path_buf()));
-        // The observed rebound of each tracked run, above the same profile as the simulated ones.
-        for r in model.runs.iter_mut() {
-            if let Some(track) = campaign.tracks.get(&r.id) {
-                let profile = &model.profile;
-                let heights =
-                    track.iter().map(|q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z));
-                attach_track(r, track, heights.collect())?;
-                model.rebounds = true;
-            }
-        }
-        Ok(model)
+        model.with_tracks(&campaign.tracks, cfg.track_noise_m)
     }
 
     /// A model from a profile and options. For synthetic studies and tests.
@@ -106,6 +96,30 @@ impl Model2d {
     pub fn with_rebounds(mut self, on: bool) -> Model2d {
         self.rebounds = on;
         self
+    }
+
+    /// The model with the tracked paths `tracks` (by run id, `x_m` along the profile) attached: each tracked run gets
+    /// its observed rebound, above the same profile as the simulated ones, and its track times; with
+    /// `track_noise_m` declared, simulated paths are read as the tracks were ([`ReboundMeter`]).
+    ///
+    /// # Errors
+    /// A track has no point over the profile.
+    pub fn with_tracks(
+        mut self,
+        tracks: &BTreeMap<String, Vec<TrackPoint>>,
+        track_noise_m: Option<f64>,
+    ) -> Result<Model2d> {
+        self.track_noise_m = track_noise_m;
+        for r in self.runs.iter_mut() {
+            if let Some(track) = tracks.get(&r.id) {
+                let profile = &self.profile;
+                let heights =
+                    track.iter().map(|q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z));
+                attach_track(r, track, heights.collect())?;
+                self.rebounds = true;
+            }
+        }
+        Ok(self)
     }
 
     /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model2d::from_parts`]).

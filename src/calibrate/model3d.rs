@@ -109,23 +109,8 @@ impl Model3d {
         }
         let mut model = Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)?
             .with_release_attempts(cfg.release_attempts);
-        model.track_noise_m = cfg.track_noise_m;
         model.files = Some((campaign.dir.clone(), spec));
-        // The observed rebound of each tracked run, read on the same terrain as the simulated ones.
-        for k in 0..model.runs.len() {
-            if let Some(track) = campaign.tracks.get(&model.runs[k].id) {
-                let heights = track
-                    .iter()
-                    .map(|q| {
-                        let p = model.local(q.position_m);
-                        model.terrain.surface.height(p.x, p.y).map_or(f64::NAN, |z| p.z - z)
-                    })
-                    .collect();
-                attach_track(&mut model.runs[k], track, heights)?;
-                model.rebounds = true;
-            }
-        }
-        Ok(model)
+        model.with_tracks(&campaign.tracks, cfg.track_noise_m)
     }
 
     /// A model from a terrain already built (its materials name the calibrated materials), rock bodies by block
@@ -180,6 +165,34 @@ impl Model3d {
     pub fn with_rebounds(mut self, on: bool) -> Model3d {
         self.rebounds = on;
         self
+    }
+
+    /// The model with the tracked paths `tracks` (by run id, in the campaign's frame) attached: each tracked run gets
+    /// its observed rebound, read on the same terrain as the simulated ones, and its track times; with
+    /// `track_noise_m` declared, simulated paths are read as the tracks were ([`ReboundMeter`]).
+    ///
+    /// # Errors
+    /// A track has no point over the terrain.
+    pub fn with_tracks(
+        mut self,
+        tracks: &BTreeMap<String, Vec<TrackPoint>>,
+        track_noise_m: Option<f64>,
+    ) -> Result<Model3d> {
+        self.track_noise_m = track_noise_m;
+        for k in 0..self.runs.len() {
+            if let Some(track) = tracks.get(&self.runs[k].id) {
+                let heights = track
+                    .iter()
+                    .map(|q| {
+                        let p = self.local(q.position_m);
+                        self.terrain.surface.height(p.x, p.y).map_or(f64::NAN, |z| p.z - z)
+                    })
+                    .collect();
+                attach_track(&mut self.runs[k], track, heights)?;
+                self.rebounds = true;
+            }
+        }
+        Ok(self)
     }
 
     /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model3d::from_parts`]).
