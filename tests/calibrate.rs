@@ -708,16 +708,21 @@ fn declared_tracking_noise_reads_the_simulated_paths_as_the_tracks_were() {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-        json["final"]["calibration"].clone()
+        (json, String::from_utf8_lossy(&o.stderr).to_string())
     };
-    let (as_is, read) =
+    let ((as_is, console), (read, _)) =
         (calibration(truth.clone(), "as_is"), calibration(format!("track_noise_m = 0.1\n{truth}"), "read"));
+    // The tracks' scatter around a smooth path estimates the noise added (0.1 m), and the console suggests it.
+    let scatter = as_is["track_scatter_m"].as_f64().unwrap();
+    assert!((0.085..0.115).contains(&scatter), "scatter {scatter} m, noise 0.1 m");
+    assert!(console.contains("declare track_noise_m = 0.1"), "{console}");
+    let (as_is, read) = (&as_is["final"]["calibration"], &read["final"]["calibration"]);
     let crps = |m: &serde_json::Value| m["rebound_crps_m"].as_f64().unwrap();
     assert!(
-        crps(&read) < 0.75 * crps(&as_is),
+        crps(read) < 0.75 * crps(as_is),
         "rebound CRPS {} (read as tracked) against {} (as is)",
-        crps(&read),
-        crps(&as_is)
+        crps(read),
+        crps(as_is)
     );
     assert_eq!(as_is["runout_mae_m"], read["runout_mae_m"]);
     let e = CalibrationConfig::from_toml_str("track_noise_m = -0.1\n", "c.toml").unwrap_err().to_string();

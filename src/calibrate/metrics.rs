@@ -226,6 +226,7 @@ pub(crate) mod tests {
             group,
             rebound_height_m: None,
             track_times_s: Vec::new(),
+            track_scatter_m: None,
         }
     }
 

@@ -140,6 +140,8 @@ pub fn calibrate(
         cfg.rebound_weight = objective::default_rebound_weight(model.runs(), cal);
     }
     let tracked = cal.iter().filter(|&&i| model.runs()[i].rebound_height_m.is_some()).count();
+    let scatters: Vec<f64> = cal.iter().filter_map(|&i| model.runs()[i].track_scatter_m).collect();
+    let track_scatter = (!scatters.is_empty()).then(|| stats::median(&scatters));
     if tracked > 0 {
         log(&format!(
             "{tracked} calibration runs were tracked: each one's rebound-height CRPS counts {:.1} m of run-out",
@@ -147,6 +149,18 @@ pub fn calibrate(
         ));
         if let Some(sd) = cfg.track_noise_m {
             log(&format!("simulated paths are read at the tracks' times with {sd} m of tracking noise"));
+        }
+        if let Some(scatter) = track_scatter {
+            let hint = if cfg.track_noise_m.is_none() && scatter >= rebound::TRACK_SCATTER_HINT_M {
+                format!(
+                    " (tracking noise raises observed rebounds: if it is that, declare track_noise_m = {scatter:.2})"
+                )
+            } else {
+                String::new()
+            };
+            log(&format!(
+                "the tracked heights scatter by {scatter:.3} m around a smooth path (median over runs){hint}"
+            ));
         }
     } else if cfg.track_noise_m.is_some() {
         log("note: track_noise_m is set but no calibration run is tracked (observed_trajectories.csv): it is unused");
@@ -234,6 +248,7 @@ pub fn calibrate(
         diagnostics: diag_base,
         diagnostics_final: diag_final,
         zone_check: Some((&zc).into()),
+        track_scatter_m: track_scatter,
         back_analysis: back,
         population_fit: serde_json::json!({
             "objective": cfg.objective,

@@ -120,6 +120,10 @@ pub struct Report {
     pub diagnostics_final: Vec<Diagnostic>,
     /// The zone check of the baseline.
     pub zone_check: Option<ZoneSummary>,
+    /// How far the tracked heights of the calibration runs scatter around a smooth path, m (the median over the
+    /// tracked runs of [`super::rebound::track_scatter_m`], an estimate of the tracking noise); `None` without tracks.
+    #[serde(default)]
+    pub track_scatter_m: Option<f64>,
     /// Per-run back-analysis (mean ± sd per material).
     pub back_analysis: Vec<BackAnalysisRow>,
     /// Objective evaluations of the population fit and its final value.
@@ -531,6 +535,11 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
     if r.baseline.calibration.rebound_mae_m.is_some() {
         let _ = writeln!(s, "\n### Rebound heights of the tracked runs\n");
         let _ = writeln!(s, "The rebound height is the largest rise of the centre of mass above the ground over the lowest it had been (docs/calibration.md); each tracked run's rebound CRPS counts {} m of run-out in the score (`rebound_weight`).\n", fmt(r.settings.rebound_weight.unwrap_or(0.0)));
+        if let Some(scatter) = r.track_scatter_m {
+            let declared =
+                r.settings.track_noise_m.map_or("none declared".to_string(), |sd| format!("declared {} m", fmt(sd)));
+            let _ = writeln!(s, "The tracked heights scatter by {} m around a smooth path (median over the calibration runs, an estimate of the tracking noise; `track_noise_m`: {declared}).\n", fmt(scatter));
+        }
         let _ = writeln!(s, "| model, runs | rebound_mae_m | rebound_crps_m |");
         let _ = writeln!(s, "|---|---|---|");
         for (name, st) in [("baseline", &r.baseline), ("final", &r.final_stage)] {

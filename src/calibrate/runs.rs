@@ -43,6 +43,9 @@ pub struct FieldRun {
     pub rebound_height_m: Option<f64>,
     /// Times of the run's tracked points since the first, s (empty without a track).
     pub track_times_s: Vec<f64>,
+    /// How far the track's heights scatter around a smooth path, m ([`super::rebound::track_scatter_m`]); `None`
+    /// without a track of at least 5 points.
+    pub track_scatter_m: Option<f64>,
 }
 
 impl FieldRun {
@@ -95,6 +98,7 @@ pub fn field_runs(campaign: &Campaign, group_link_m: f64) -> Result<(Vec<FieldRu
             group: 0,
             rebound_height_m: None,
             track_times_s: Vec::new(),
+            track_scatter_m: None,
         });
     }
     if runs.len() < 6 {

@@ -307,6 +307,7 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
                     group: 0,
                     rebound_height_m: None,
                     track_times_s: Vec::new(),
+                    track_scatter_m: None,
                 });
             }
         }
@@ -562,6 +563,7 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
                     group: 0,
                     rebound_height_m: None,
                     track_times_s: Vec::new(),
+                    track_scatter_m: None,
                 });
             }
         }

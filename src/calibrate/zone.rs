@@ -337,6 +337,7 @@ mod tests {
                 group: i % 2,
                 rebound_height_m: None,
                 track_times_s: Vec::new(),
+                track_scatter_m: None,
             })
             .collect();
         let sims = simulated
