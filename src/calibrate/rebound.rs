@@ -137,6 +137,9 @@ pub fn track_scatter_m(track: &[TrackPoint]) -> Option<f64> {
         .windows(4)
         .filter_map(|w| {
             let t = w[2].time_s;
+            if !(w[0].time_s < w[1].time_s && w[1].time_s < t && t < w[3].time_s) {
+                return None;
+            }
             let others = [&w[0], &w[1], &w[3]];
             let mut predicted = 0.0;
             let mut sum_sq = 0.0;
@@ -150,8 +153,7 @@ pub fn track_scatter_m(track: &[TrackPoint]) -> Option<f64> {
                 predicted += weight * p.position_m[2];
                 sum_sq += weight * weight;
             }
-            (predicted.is_finite() && w[0].time_s < w[1].time_s && w[1].time_s < t && t < w[3].time_s)
-                .then(|| (w[2].position_m[2] - predicted) / (1.0 + sum_sq).sqrt())
+            Some((w[2].position_m[2] - predicted) / (1.0 + sum_sq).sqrt())
         })
         .collect();
     if dev.len() < 3 {

@@ -44,7 +44,7 @@ pub struct FieldRun {
     /// Times of the run's tracked points since the first, s (empty without a track).
     pub track_times_s: Vec<f64>,
     /// How far the track's heights scatter around a smooth path, m ([`super::rebound::track_scatter_m`]); `None`
-    /// without a track of at least 5 points.
+    /// without a track of at least 6 points.
     pub track_scatter_m: Option<f64>,
 }
 
