@@ -1,9 +1,9 @@
 //! Writes a synthetic 3DRB field campaign, made with talus's own rigid-body engine, as the files of a real one: the
 //! campaign CSVs, `terrain.obj` and, for boulders, their hull as `boulder.csv`. CASE is any 3DRB case of
-//! `calibration_study` (`case_3d`: speed, speed_mixed, size, zone, rough, control_a..d, NAME_tracked) with seed
-//! SEED (default 1); a tracked case also gets each run's true path as `observed_trajectories.csv`, every height plus
-//! Gaussian noise of sd TRACK_POINT_NOISE_M (default 0: exact tracks). For trying `talus calibrate --model 3drb` on
-//! files whose truth is known.
+//! `calibration_study` (`case_3d`: speed, speed_mixed, size, size_drag, zone, rough, control_a..e, NAME_tracked)
+//! with seed SEED (default 1); a tracked case also gets each run's true path as `observed_trajectories.csv`, every
+//! height plus Gaussian noise of sd TRACK_POINT_NOISE_M (default 0: exact tracks). For trying `talus calibrate
+//! --model 3drb` on files whose truth is known.
 //!
 //! Run: cargo run --release --example write_terrain_campaign -- DIR CASE [TRACK_POINT_NOISE_M [SEED]]
 use talus::calibrate::synthetic::{case_3d, write_terrain_campaign};

@@ -161,12 +161,6 @@ impl Model3d {
         })
     }
 
-    /// The model measuring every simulated path's rebound height, or not (by default: if a run is tracked).
-    pub fn with_rebounds(mut self, on: bool) -> Model3d {
-        self.rebounds = on;
-        self
-    }
-
     /// The model with the tracked paths `tracks` (by run id, in the campaign's frame) attached: each tracked run gets
     /// its observed rebound, read on the same terrain as the simulated ones, and its track times; with
     /// `track_noise_m` declared, simulated paths are read as the tracks were ([`ReboundMeter`]).

@@ -319,14 +319,10 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
         Model3d::from_parts(truth_runs, groups.clone(), terrain.clone(), bodies.clone(), sim.clone(), None)?;
     observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m)?;
     let model = Model3d::from_parts(runs, groups, terrain, bodies, sim, None)?;
-    match spec.track_noise_m {
-        None => Ok(model),
-        Some(sd) => {
-            let tracks =
-                observed_tracks(model.runs(), truth_model.tracks(&truth, 0, data_seed(spec.seed))?, sd, spec.seed);
-            model.with_tracks(&tracks, Some(sd))
-        }
-    }
+    let tracks = campaign_tracks(model.runs(), spec.track_noise_m, spec.seed, || {
+        truth_model.tracks(&truth, 0, data_seed(spec.seed))
+    })?;
+    model.with_tracks(&tracks, spec.track_noise_m)
 }
 
 /// The true model of a synthetic 3DRB campaign: the terrain's material, plus the hidden effect.
@@ -573,14 +569,10 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
     let truth_model = Model2d::from_parts(runs.clone(), groups.clone(), profile.clone(), options.clone())?;
     observe(&truth_model, &truth, &mut runs, spec.seed, spec.noise_m)?;
     let model = Model2d::from_parts(runs, groups, profile, options)?;
-    match spec.track_noise_m {
-        None => Ok(model),
-        Some(sd) => {
-            let tracks =
-                observed_tracks(model.runs(), truth_model.tracks(&truth, 0, data_seed(spec.seed))?, sd, spec.seed);
-            model.with_tracks(&tracks, Some(sd))
-        }
-    }
+    let tracks = campaign_tracks(model.runs(), spec.track_noise_m, spec.seed, || {
+        truth_model.tracks(&truth, 0, data_seed(spec.seed))
+    })?;
+    model.with_tracks(&tracks, spec.track_noise_m)
 }
 
 /// Writes the synthetic 2DLM campaign of `spec` into the folder `dir` as a user's field campaign would be: the
@@ -706,6 +698,20 @@ fn observed_tracks(
         tracks.insert(r.id.clone(), track);
     }
     tracks
+}
+
+/// The observed tracks of a synthetic campaign's `runs`: on a tracked campaign (`track_noise_m` given) the true
+/// `paths` as [`observed_tracks`] records them with that noise, on an untracked one none (`paths` not simulated).
+fn campaign_tracks(
+    runs: &[FieldRun],
+    track_noise_m: Option<f64>,
+    seed: u64,
+    paths: impl FnOnce() -> Result<Vec<Vec<TrackPoint>>>,
+) -> Result<BTreeMap<String, Vec<TrackPoint>>> {
+    match track_noise_m {
+        None => Ok(BTreeMap::new()),
+        Some(sd) => Ok(observed_tracks(runs, paths()?, sd, seed)),
+    }
 }
 
 /// The `observed_trajectories.csv` text of the `tracks` of `runs` under `header`, each position written by
