@@ -10,11 +10,13 @@
 //! each on 2 cores, 3d_designs 15 minutes, mixed_designs 7 minutes, tracks 4 minutes a design)
 use talus::calibrate::config::Objective;
 use talus::calibrate::effects::{EffectKind, MOBILITY_GRID};
+use talus::calibrate::impacts::{summarise, Impact};
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::model3d::Model3d;
 use talus::calibrate::objective::{objective, rebound_crps};
 use talus::calibrate::params::{Candidate, EffectSpec, MOBILITY};
+use talus::calibrate::runs::FieldRun;
 use talus::calibrate::synthetic::{
     case_2d, case_3d, material_params_2d, material_params_3d, standard_zone, steep_2d, synthetic_2d, synthetic_3d,
     truth_2d, truth_3d, Hidden, Synthetic2d, Synthetic3d, TRUE_2D,
@@ -238,8 +240,41 @@ fn crps_noise() {
     }
 }
 
+/// The impacts read from the tracks of tracked synthetic cases ([`talus::calibrate::impacts`]), over all runs:
+/// count, median (and quartiles) of the normal restitution, median tangential restitution and normal impact speed.
+fn report_impacts(names: &[String]) {
+    for name in names {
+        let runs: Vec<FieldRun> = if let Some(spec) = name.strip_prefix("2d_").and_then(|n| case_2d(n, 1)) {
+            synthetic_2d(&spec, Options2d::default()).unwrap().runs().to_vec()
+        } else if let Some(spec) = case_3d(name, 1) {
+            synthetic_3d(&spec, SimParams::default()).unwrap().runs().to_vec()
+        } else {
+            panic!("no case {name}")
+        };
+        let impacts: Vec<&Impact> = runs.iter().flat_map(|r| &r.impacts).collect();
+        let with = runs.iter().filter(|r| !r.impacts.is_empty()).count();
+        match summarise(&impacts, with) {
+            Some(s) => println!(
+                "{name:<22} impacts {:>4} in {:>3} runs  e_n {:.3} [{:.3}, {:.3}]  e_t {:.3}  v_n {:.2} m/s",
+                s.n,
+                s.runs,
+                s.normal_restitution_median,
+                s.normal_restitution_iqr[0],
+                s.normal_restitution_iqr[1],
+                s.tangential_restitution_median.unwrap_or(f64::NAN),
+                s.normal_speed_in_median_mps
+            ),
+            None => println!("{name:<22} impacts {:>4}: too few", impacts.len()),
+        }
+    }
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
+    if args.first().is_some_and(|a| a == "impacts") {
+        report_impacts(&args[1..]);
+        return;
+    }
     let want = |n: &str| args.is_empty() || args.iter().any(|a| a == n);
     for name in ["control_a", "control_b", "speed", "size", "zone"] {
         if want(&format!("2d_{name}")) {

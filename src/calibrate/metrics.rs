@@ -227,6 +227,7 @@ pub(crate) mod tests {
             rebound_height_m: None,
             track_times_s: Vec::new(),
             track_scatter_m: None,
+            impacts: Vec::new(),
         }
     }
 

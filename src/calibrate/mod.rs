@@ -22,6 +22,7 @@ pub mod effects;
 #[path = "loop.rs"]
 pub mod effects_loop;
 pub mod fit;
+pub mod impacts;
 pub mod maps;
 pub mod metrics;
 pub mod model;
@@ -142,6 +143,9 @@ pub fn calibrate(
     let tracked = cal.iter().filter(|&&i| model.runs()[i].rebound_height_m.is_some()).count();
     let scatters: Vec<f64> = cal.iter().filter_map(|&i| model.runs()[i].track_scatter_m).collect();
     let track_scatter = (!scatters.is_empty()).then(|| stats::median(&scatters));
+    let cal_impacts: Vec<&impacts::Impact> = cal.iter().flat_map(|&i| &model.runs()[i].impacts).collect();
+    let impact_summary =
+        impacts::summarise(&cal_impacts, cal.iter().filter(|&&i| !model.runs()[i].impacts.is_empty()).count());
     if tracked > 0 {
         log(&format!(
             "{tracked} calibration runs were tracked: each one's rebound-height CRPS counts {:.1} m of run-out",
@@ -161,6 +165,21 @@ pub fn calibrate(
             log(&format!(
                 "the tracked heights scatter by {scatter:.3} m around a smooth path (median over runs){hint}"
             ));
+        }
+        match &impact_summary {
+            Some(s) => log(&format!(
+                "{} bounces read from the tracks of {} calibration runs: normal restitution of the centre of mass {:.2} (quartiles {:.2}-{:.2}), tangential {} (impacts.csv)",
+                s.n,
+                s.runs,
+                s.normal_restitution_median,
+                s.normal_restitution_iqr[0],
+                s.normal_restitution_iqr[1],
+                s.tangential_restitution_median.map_or("-".into(), |v| format!("{v:.2}"))
+            )),
+            None => log(&format!(
+                "{} bounces could be read from the tracks (flights too short for their sampling and noise): no per-impact restitution",
+                cal_impacts.len()
+            )),
         }
     } else if cfg.track_noise_m.is_some() {
         log("note: track_noise_m is set but no calibration run is tracked (observed_trajectories.csv): it is unused");
@@ -249,6 +268,7 @@ pub fn calibrate(
         diagnostics_final: diag_final,
         zone_check: Some((&zc).into()),
         track_scatter_m: track_scatter,
+        impacts: impact_summary,
         back_analysis: back,
         population_fit: serde_json::json!({
             "objective": cfg.objective,

@@ -4,6 +4,7 @@
 
 use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
+use super::impacts::read_impacts;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
 use super::rebound::{attach_track, rebound_meter, ReboundMeter};
@@ -116,6 +117,8 @@ impl Model2d {
                 let heights =
                     track.iter().map(|q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z));
                 attach_track(r, track, heights.collect())?;
+                let noise_m = track_noise_m.or(r.track_scatter_m).unwrap_or(0.0);
+                r.impacts = read_impacts(track, noise_m, &|x, _| profile.z_at(x));
                 self.rebounds = true;
             }
         }

@@ -4,6 +4,7 @@
 
 use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
+use super::impacts::read_impacts;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
 use super::rebound::{attach_track, rebound_meter, ReboundMeter};
@@ -183,6 +184,17 @@ impl Model3d {
                     })
                     .collect();
                 attach_track(&mut self.runs[k], track, heights)?;
+                let local: Vec<TrackPoint> = track
+                    .iter()
+                    .map(|q| TrackPoint { time_s: q.time_s, position_m: self.local(q.position_m).into() })
+                    .collect();
+                let noise_m = track_noise_m.or(self.runs[k].track_scatter_m).unwrap_or(0.0);
+                let surface = &self.terrain.surface;
+                let mut impacts = read_impacts(&local, noise_m, &|x, y| surface.height(x, y));
+                for imp in &mut impacts {
+                    imp.position_m = track[imp.point].position_m;
+                }
+                self.runs[k].impacts = impacts;
                 self.rebounds = true;
             }
         }

@@ -9,6 +9,7 @@ use super::maps::residual_map;
 use super::metrics::{Metrics, MetricsSet};
 use super::model::{Model, RunSims};
 use super::params::{Params, Region};
+use super::runs::FieldRun;
 use super::zone::ZoneCheck;
 use crate::error::{Error, Result};
 use crate::render::colormap::CATEGORICAL;
@@ -124,6 +125,10 @@ pub struct Report {
     /// tracked runs of [`super::rebound::track_scatter_m`], an estimate of the tracking noise); `None` without tracks.
     #[serde(default)]
     pub track_scatter_m: Option<f64>,
+    /// The bounces read from the tracks of the calibration runs ([`super::impacts`]; each one in `impacts.csv`);
+    /// `None` with fewer than [`super::impacts::MIN_IMPACTS`].
+    #[serde(default)]
+    pub impacts: Option<super::impacts::ImpactSummary>,
     /// Per-run back-analysis (mean ± sd per material).
     pub back_analysis: Vec<BackAnalysisRow>,
     /// Objective evaluations of the population fit and its final value.
@@ -181,6 +186,9 @@ pub fn write_report(
     crate::io::write_bytes_atomic(&dir.join("report.json"), json.as_bytes())?;
     let runs = model.runs();
     write_runs_csv(&dir.join("runs.csv"), model, base_cal, final_cal, base_hold, final_hold)?;
+    if runs.iter().any(|r| !r.impacts.is_empty()) {
+        write_impacts_csv(&dir.join("impacts.csv"), runs, base_cal, base_hold)?;
+    }
     let mut figures: Vec<(String, String)> = Vec::new();
     // Covariates with a chart of run-out residual against them.
     let mut seen: Vec<String> = Vec::new();
@@ -417,6 +425,36 @@ fn write_runs_csv(
     })
 }
 
+/// `impacts.csv`: one row per bounce read from a track ([`super::impacts`]), with its run and set.
+fn write_impacts_csv(path: &Path, runs: &[FieldRun], cal: &[RunSims], hold: &[RunSims]) -> Result<()> {
+    use std::io::Write as _;
+    crate::io::write_atomic(path, |w| {
+        let io = |e| Error::io(path, e);
+        writeln!(w, "trajectory_id,set,time_s,x_m,y_m,z_m,normal_speed_in_mps,tangential_speed_in_mps,incidence_deg,normal_restitution,tangential_restitution").map_err(io)?;
+        for (set, sims) in [("calibration", cal), ("holdout", hold)] {
+            for s in sims {
+                let r = &runs[s.run];
+                for i in &r.impacts {
+                    let [x, y, z] = i.position_m;
+                    let et = i.tangential_restitution.map_or(String::new(), |v| format!("{v:.4}"));
+                    writeln!(
+                        w,
+                        "{},{set},{:.3},{x:.3},{y:.3},{z:.3},{:.3},{:.3},{:.2},{:.4},{et}",
+                        r.id,
+                        i.time_s,
+                        i.normal_speed_in_mps,
+                        i.tangential_speed_in_mps,
+                        i.incidence_deg,
+                        i.normal_restitution
+                    )
+                    .map_err(io)?;
+                }
+            }
+        }
+        Ok(())
+    })
+}
+
 /// A colour range symmetric about 0 at the 95th percentile of |value| (ours: one extreme cell would otherwise wash
 /// out the map).
 fn robust_range(g: &crate::raster::Grid) -> Option<(f32, f32)> {
@@ -539,6 +577,15 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             let declared =
                 r.settings.track_noise_m.map_or("none declared".to_string(), |sd| format!("declared {} m", fmt(sd)));
             let _ = writeln!(s, "The tracked heights scatter by {} m around a smooth path (median over the calibration runs, an estimate of the tracking noise; `track_noise_m`: {declared}).\n", fmt(scatter));
+        }
+        match &r.impacts {
+            Some(i) => {
+                let et = i.tangential_restitution_median.map_or("–".into(), fmt);
+                let _ = writeln!(s, "Bounces read from the tracks of the calibration runs (`impacts.csv`, all runs; docs/calibration.md, \"Impacts read from tracks\"): {} in {} runs, normal impact speed {} m/s (median); apparent restitution of the centre of mass, normal {} (quartiles {}–{}), tangential {}. Only bounces with a readable flight on each side count: low bounces are missed.\n", i.n, i.runs, fmt(i.normal_speed_in_median_mps), fmt(i.normal_restitution_median), fmt(i.normal_restitution_iqr[0]), fmt(i.normal_restitution_iqr[1]), et);
+            }
+            None => {
+                let _ = writeln!(s, "Too few bounces could be read from the tracks for a per-impact restitution (flights too short for the tracks' sampling and noise).\n");
+            }
         }
         let _ = writeln!(s, "| model, runs | rebound_mae_m | rebound_crps_m |");
         let _ = writeln!(s, "|---|---|---|");

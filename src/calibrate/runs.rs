@@ -46,6 +46,8 @@ pub struct FieldRun {
     /// How far the track's heights scatter around a smooth path, m ([`super::rebound::track_scatter_m`]); `None`
     /// without a track of at least 6 points.
     pub track_scatter_m: Option<f64>,
+    /// The impacts read from the run's track ([`super::impacts`]); empty without a track.
+    pub impacts: Vec<super::impacts::Impact>,
 }
 
 impl FieldRun {
@@ -99,6 +101,7 @@ pub fn field_runs(campaign: &Campaign, group_link_m: f64) -> Result<(Vec<FieldRu
             rebound_height_m: None,
             track_times_s: Vec::new(),
             track_scatter_m: None,
+            impacts: Vec::new(),
         });
     }
     if runs.len() < 6 {

@@ -308,6 +308,7 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
                     rebound_height_m: None,
                     track_times_s: Vec::new(),
                     track_scatter_m: None,
+                    impacts: Vec::new(),
                 });
             }
         }
@@ -560,6 +561,7 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
                     rebound_height_m: None,
                     track_times_s: Vec::new(),
                     track_scatter_m: None,
+                    impacts: Vec::new(),
                 });
             }
         }

@@ -338,6 +338,7 @@ mod tests {
                 rebound_height_m: None,
                 track_times_s: Vec::new(),
                 track_scatter_m: None,
+                impacts: Vec::new(),
             })
             .collect();
         let sims = simulated
