@@ -252,20 +252,20 @@ fn report_impacts(names: &[String]) {
             panic!("no case {name}")
         };
         let impacts: Vec<&Impact> = runs.iter().flat_map(|r| &r.impacts).collect();
-        let with = runs.iter().filter(|r| !r.impacts.is_empty()).count();
-        match summarise(&impacts, with) {
-            Some(s) => println!(
-                "{name:<22} impacts {:>4} in {:>3} runs  e_n {:.3} [{:.3}, {:.3}]  e_t {:.3}  v_n {:.2} m/s",
-                s.n,
-                s.runs,
-                s.normal_restitution_median,
-                s.normal_restitution_iqr[0],
-                s.normal_restitution_iqr[1],
-                s.tangential_restitution_median.unwrap_or(f64::NAN),
-                s.normal_speed_in_median_mps
-            ),
-            None => println!("{name:<22} impacts {:>4}: too few", impacts.len()),
-        }
+        let tracked = runs.iter().filter(|r| !r.track_times_s.is_empty()).count();
+        let Some(s) = summarise(&impacts, tracked) else { continue };
+        let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
+        let [a, b] = s.normal_restitution_iqr.map_or([None, None], |q| q.map(Some));
+        println!(
+            "{name:<22} bounces {:>4} in {:>3} tracks  e_n {} [{}, {}]  e_t {}  v_n {} m/s",
+            s.n,
+            s.paths,
+            f(s.normal_restitution_median),
+            f(a),
+            f(b),
+            f(s.tangential_restitution_median),
+            f(s.normal_speed_in_median_mps)
+        );
     }
 }
 

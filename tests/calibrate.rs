@@ -964,8 +964,38 @@ fn bounces_read_from_exact_tracks_give_back_the_restitution_of_the_model_that_ma
             .flat_map(|r| &r.impacts)
             .filter(|i| (lo..hi).contains(&i.normal_speed_in_mps))
             .collect();
-        talus::calibrate::impacts::summarise(&sel, 1).unwrap().normal_restitution_median
+        talus::calibrate::impacts::summarise(&sel, 1).unwrap().normal_restitution_median.unwrap()
     };
     let (fast, slow) = (median_between(8.0, 100.0), median_between(1.0, 3.0));
     assert!((fast - 0.6).abs() < 0.05 && slow > 0.8, "fast {fast}, slow {slow}");
+}
+
+#[test]
+fn simulated_paths_read_as_the_tracks_were_bounce_as_the_tracks_do_under_the_true_model() {
+    // The 2DLM speed case with exact tracks: the true model's simulated paths, read the same way, bounce as the
+    // tracks do (bounces per path within 15 %, median restitutions within 0.05); calibrated, the baseline (constant
+    // Rn) bounces far less than the tracks, and the final model, with speed-dependent restitution found, close to
+    // them.
+    use talus::calibrate::impacts::{observed_summary, simulated_summary};
+    let spec = Synthetic2d { track_noise_m: Some(0.0), ..case_2d("speed", 1).unwrap() };
+    let model = synthetic_2d(&spec, Options2d::default()).unwrap();
+    let all: Vec<usize> = (0..model.runs().len()).collect();
+    let obs = observed_summary(&model, &all).unwrap();
+    let sim = simulated_summary(&model, &truth_2d(&spec), &all, 20, 1, None, 0).unwrap().unwrap();
+    let close = |a: Option<f64>, b: Option<f64>| (a.unwrap() - b.unwrap()).abs() < 0.05;
+    assert!(obs.n >= 30 && (sim.per_path / obs.per_path - 1.0).abs() < 0.15, "{obs:?}\n{sim:?}");
+    assert!(close(sim.normal_restitution_median, obs.normal_restitution_median), "{obs:?}\n{sim:?}");
+    assert!(close(sim.tangential_restitution_median, obs.tangential_restitution_median), "{obs:?}\n{sim:?}");
+    let cfg = CalibrationConfig::default();
+    let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+    let r = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report;
+    let b = r.bounces.iter().find(|b| b.set == "calibration").unwrap();
+    let per_path = |s: &Option<talus::calibrate::impacts::ImpactSummary>| s.as_ref().unwrap().per_path;
+    let (base, fin) = (per_path(&b.baseline), per_path(&b.final_model));
+    assert!(r.effects_added.iter().any(|e| e.name == "speed_restitution"), "{:?}", r.effects_added);
+    assert!(
+        base < 0.6 * b.observed.per_path && (fin / b.observed.per_path - 1.0).abs() < 0.25,
+        "bounces per path: observed {}, baseline {base}, final {fin}",
+        b.observed.per_path
+    );
 }

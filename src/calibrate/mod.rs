@@ -143,9 +143,7 @@ pub fn calibrate(
     let tracked = cal.iter().filter(|&&i| model.runs()[i].rebound_height_m.is_some()).count();
     let scatters: Vec<f64> = cal.iter().filter_map(|&i| model.runs()[i].track_scatter_m).collect();
     let track_scatter = (!scatters.is_empty()).then(|| stats::median(&scatters));
-    let cal_impacts: Vec<&impacts::Impact> = cal.iter().flat_map(|&i| &model.runs()[i].impacts).collect();
-    let impact_summary =
-        impacts::summarise(&cal_impacts, cal.iter().filter(|&&i| !model.runs()[i].impacts.is_empty()).count());
+    let impact_summary = impacts::observed_summary(model, cal);
     if tracked > 0 {
         log(&format!(
             "{tracked} calibration runs were tracked: each one's rebound-height CRPS counts {:.1} m of run-out",
@@ -166,20 +164,14 @@ pub fn calibrate(
                 "the tracked heights scatter by {scatter:.3} m around a smooth path (median over runs){hint}"
             ));
         }
-        match &impact_summary {
-            Some(s) => log(&format!(
-                "{} bounces read from the tracks of {} calibration runs: normal restitution of the centre of mass {:.2} (quartiles {:.2}-{:.2}), tangential {} (impacts.csv)",
-                s.n,
-                s.runs,
-                s.normal_restitution_median,
-                s.normal_restitution_iqr[0],
-                s.normal_restitution_iqr[1],
-                s.tangential_restitution_median.map_or("-".into(), |v| format!("{v:.2}"))
-            )),
-            None => log(&format!(
-                "{} bounces could be read from the tracks (flights too short for their sampling and noise): no per-impact restitution",
-                cal_impacts.len()
-            )),
+        if let Some(s) = &impact_summary {
+            let en = match (s.normal_restitution_median, s.normal_restitution_iqr) {
+                (Some(m), Some([a, b])) => {
+                    format!(": normal restitution of the centre of mass {m:.2} (quartiles {a:.2}-{b:.2})")
+                }
+                _ => " (too few for a median restitution: flights too short for the tracks' sampling and noise)".into(),
+            };
+            log(&format!("{} bounces read from the tracks of {} calibration runs{en} (impacts.csv)", s.n, s.paths));
         }
     } else if cfg.track_noise_m.is_some() {
         log("note: track_noise_m is set but no calibration run is tracked (observed_trajectories.csv): it is unused");
@@ -225,6 +217,22 @@ pub fn calibrate(
         .first()
         .cloned()
         .unwrap_or_else(|| diagnose::diagnose(model, &base_cal, cfg.effects.permutations, cfg.seed).1);
+    let mut bounces = Vec::new();
+    for (set, which) in [("calibration", cal), ("holdout", hold)] {
+        if let Some(observed) = impacts::observed_summary(model, which) {
+            let read = |c: &Candidate| {
+                impacts::simulated_summary(model, c, which, cfg.repeats, cfg.seed, cfg.track_noise_m, cfg.threads)
+            };
+            let baseline_b = read(&baseline)?;
+            let final_b = if final_c == baseline { baseline_b.clone() } else { read(&final_c)? };
+            bounces.push(impacts::BounceComparison {
+                set: set.into(),
+                observed,
+                baseline: baseline_b,
+                final_model: final_b,
+            });
+        }
+    }
     let frame = model.map_frame();
     let zc = zone::zone_check(model, &base_cal, &frame, 199, cfg.seed.wrapping_add(1));
     let ids = |v: &[usize]| v.iter().map(|&i| runs[i].id.clone()).collect::<Vec<_>>();
@@ -268,7 +276,7 @@ pub fn calibrate(
         diagnostics_final: diag_final,
         zone_check: Some((&zc).into()),
         track_scatter_m: track_scatter,
-        impacts: impact_summary,
+        bounces,
         back_analysis: back,
         population_fit: serde_json::json!({
             "objective": cfg.objective,

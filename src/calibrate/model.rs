@@ -10,6 +10,7 @@ use super::config::ModelKind;
 use super::params::Candidate;
 use super::runs::{FieldRun, NOT_STARTED_M};
 use super::stats::{median, quantile_sorted, sorted};
+use crate::campaign::TrackPoint;
 use crate::error::Result;
 use crate::raster::Grid;
 use std::path::Path;
@@ -126,6 +127,11 @@ pub struct MapFrame {
 pub trait Prepared: Sync {
     /// Simulates repeat `repeat` of `run` with streams from `seed`.
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim;
+    /// The path of that simulation (time since release, centre of mass in the campaign's frame), as the engine
+    /// samples it; empty where the model does not record paths.
+    fn path(&self, _run: &FieldRun, _repeat: usize, _seed: u64) -> Vec<TrackPoint> {
+        Vec::new()
+    }
 }
 
 /// An engine bound to a campaign.
@@ -146,6 +152,11 @@ pub trait Model: Sync {
     fn map_frame(&self) -> MapFrame;
     /// Releases of a simulated rock, at most ([`super::config::CalibrationConfig::release_attempts`]).
     fn release_attempts(&self) -> usize;
+    /// The bounces of `track` (campaign frame) over this model's ground, read under height noise of sd `noise_m`
+    /// ([`super::impacts::read_impacts`]); none where the model has no ground to read them on.
+    fn read_impacts(&self, _track: &[TrackPoint], _noise_m: f64) -> Vec<super::impacts::Impact> {
+        Vec::new()
+    }
     /// Applies a candidate.
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>>;
     /// The model at `candidate` as a scenario for `talus run` (3DRB) or `talus profile` (2DLM) with `repeats`

@@ -4,7 +4,7 @@
 
 use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
-use super::impacts::read_impacts;
+use super::impacts::{read_impacts, Impact};
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
 use super::rebound::{attach_track, rebound_meter, ReboundMeter};
@@ -111,14 +111,14 @@ impl Model2d {
         track_noise_m: Option<f64>,
     ) -> Result<Model2d> {
         self.track_noise_m = track_noise_m;
-        for r in self.runs.iter_mut() {
-            if let Some(track) = tracks.get(&r.id) {
+        for k in 0..self.runs.len() {
+            if let Some(track) = tracks.get(&self.runs[k].id) {
                 let profile = &self.profile;
                 let heights =
                     track.iter().map(|q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z));
-                attach_track(r, track, heights.collect())?;
-                let noise_m = track_noise_m.or(r.track_scatter_m).unwrap_or(0.0);
-                r.impacts = read_impacts(track, noise_m, &|x, _| profile.z_at(x));
+                attach_track(&mut self.runs[k], track, heights.collect())?;
+                let noise_m = track_noise_m.or(self.runs[k].track_scatter_m).unwrap_or(0.0);
+                self.runs[k].impacts = self.read_impacts(track, noise_m);
                 self.rebounds = true;
             }
         }
@@ -239,6 +239,10 @@ impl Model for Model2d {
         MapFrame { dem: None, extent_m: [x0, -0.5, x1, 0.5], cell_m: ((x1 - x0) / 100.0).max(0.5), profile: true }
     }
 
+    fn read_impacts(&self, track: &[TrackPoint], noise_m: f64) -> Vec<Impact> {
+        read_impacts(track, noise_m, &|x, _| self.profile.z_at(x))
+    }
+
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>> {
         let (profile, mats, options, _) = self.realize(candidate)?;
         let slope = Slope2d::new(profile, mats)?;
@@ -311,6 +315,10 @@ impl Model2d {
 }
 
 impl Prepared for Prepared2d<'_> {
+    fn path(&self, run: &FieldRun, repeat: usize, seed: u64) -> Vec<TrackPoint> {
+        Model2d::track(&self.slope, &self.options, run, repeat, seed)
+    }
+
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
         let profile = self.slope.profile();
         let meter = self.model.rebounds.then(|| rebound_meter(self.model.track_noise_m, run, repeat, seed));

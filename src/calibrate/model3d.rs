@@ -184,17 +184,8 @@ impl Model3d {
                     })
                     .collect();
                 attach_track(&mut self.runs[k], track, heights)?;
-                let local: Vec<TrackPoint> = track
-                    .iter()
-                    .map(|q| TrackPoint { time_s: q.time_s, position_m: self.local(q.position_m).into() })
-                    .collect();
                 let noise_m = track_noise_m.or(self.runs[k].track_scatter_m).unwrap_or(0.0);
-                let surface = &self.terrain.surface;
-                let mut impacts = read_impacts(&local, noise_m, &|x, y| surface.height(x, y));
-                for imp in &mut impacts {
-                    imp.position_m = track[imp.point].position_m;
-                }
-                self.runs[k].impacts = impacts;
+                self.runs[k].impacts = self.read_impacts(track, noise_m);
                 self.rebounds = true;
             }
         }
@@ -318,6 +309,19 @@ impl Model for Model3d {
         self.release_attempts
     }
 
+    fn read_impacts(&self, track: &[TrackPoint], noise_m: f64) -> Vec<super::impacts::Impact> {
+        let local: Vec<TrackPoint> = track
+            .iter()
+            .map(|q| TrackPoint { time_s: q.time_s, position_m: self.local(q.position_m).into() })
+            .collect();
+        let surface = &self.terrain.surface;
+        let mut impacts = read_impacts(&local, noise_m, &|x, y| surface.height(x, y));
+        for imp in &mut impacts {
+            imp.position_m = track[imp.point].position_m;
+        }
+        impacts
+    }
+
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>> {
         let (terrain, sim, _) = self.realize(candidate)?;
         Ok(Box::new(Prepared3d { model: self, terrain, sim }))
@@ -419,12 +423,7 @@ impl Model3d {
     pub fn tracks(&self, candidate: &Candidate, repeat: usize, seed: u64) -> Result<Vec<Vec<TrackPoint>>> {
         let (terrain, sim, _) = self.realize(candidate)?;
         let prepared = Prepared3d { model: self, terrain, sim };
-        let track = |run: &FieldRun| {
-            let mut rec = PathRecorder3d { terrain: &prepared.terrain, points: Vec::new() };
-            prepared.simulate_observed(run, repeat, seed, &mut rec);
-            rec.points
-        };
-        Ok(self.runs.iter().map(track).collect())
+        Ok(self.runs.iter().map(|run| prepared.path(run, repeat, seed)).collect())
     }
 }
 
@@ -445,6 +444,12 @@ impl Observer for PathRecorder3d<'_> {
 impl Prepared for Prepared3d<'_> {
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
         self.simulate_observed(run, repeat, seed, &mut ())
+    }
+
+    fn path(&self, run: &FieldRun, repeat: usize, seed: u64) -> Vec<TrackPoint> {
+        let mut rec = PathRecorder3d { terrain: &self.terrain, points: Vec::new() };
+        self.simulate_observed(run, repeat, seed, &mut rec);
+        rec.points
     }
 }
 

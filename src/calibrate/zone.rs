@@ -304,6 +304,9 @@ impl Model for NullModel<'_> {
     ) -> crate::Result<Box<dyn super::model::Prepared + 'a>> {
         self.inner.prepare(candidate)
     }
+    fn read_impacts(&self, track: &[crate::campaign::TrackPoint], noise_m: f64) -> Vec<super::impacts::Impact> {
+        self.inner.read_impacts(track, noise_m)
+    }
 }
 
 #[cfg(test)]
