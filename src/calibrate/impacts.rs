@@ -1,9 +1,10 @@
 //! Impacts read from a tracked path (ours): where a track shows a bounce, the velocity of the centre of mass just
 //! before and just after it, and from them the apparent coefficients of restitution that field campaigns
 //! back-calculate impact by impact (normal: outgoing over incoming normal speed; tangential: the same for the speed
-//! along the ground). Read on the observed tracks, they show whether restitution falls with impact speed or with
-//! the angle of incidence (physics.md §4) directly, impact by impact, where run-outs and rebound heights only show
-//! it summed over a path.
+//! along the ground). `talus calibrate` reads the observed tracks and the models' simulated paths of the same runs
+//! the same way ([`simulated_summary`]) and sets them side by side: what is read is biased (low bounces are missed,
+//! and a rigid body's centre does not come back at Cr), so a track is compared with simulated tracks, not with
+//! the model's coefficients (docs/calibration.md, "Impacts read from tracks").
 //!
 //! Between two impacts a rock flies freely: its horizontal coordinates are linear in time and its height a parabola
 //! of curvature −g, so w(t) = z(t) + g t²/2 is linear in time too. An impact is a corner of w: the slope of a line
@@ -92,12 +93,13 @@ pub fn read_impacts(track: &[TrackPoint], noise_m: f64, ground_m: &dyn Fn(f64, f
             j..k + 1
         }
     };
+    let sums = PrefixSums::new(&t, &w);
     let gain: Vec<f64> = (0..n)
         .map(|k| {
             if k == 0 || k + 1 == n {
                 return 0.0;
             }
-            let (l, r) = (line(&t, &w, side(k, false)), line(&t, &w, side(k, true)));
+            let (l, r) = (sums.line(side(k, false)), sums.line(side(k, true)));
             let se = sigma * (1.0 / l.sxx + 1.0 / r.sxx).sqrt();
             let gain = r.slope - l.slope;
             if gain >= MIN_GAIN_MPS.max(5.0 * se) {
@@ -202,6 +204,38 @@ fn line(t: &[f64], v: &[f64], range: std::ops::Range<usize>) -> Line {
     }
     let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
     Line { intercept: vm - slope * tm, slope, sxx: sxx.max(f64::MIN_POSITIVE) }
+}
+
+/// Running sums of t, t², v and t·v, for least-squares lines over any range in constant time (the candidates'
+/// windows hold a hundred points of a millisecond track).
+struct PrefixSums {
+    /// `sums[i]`: the sums over points `0..i`, each time taken from the first point.
+    sums: Vec<[f64; 4]>,
+}
+
+impl PrefixSums {
+    fn new(t: &[f64], v: &[f64]) -> Self {
+        let mut sums = vec![[0.0; 4]];
+        let mut acc = [0.0; 4];
+        for (&ti, &vi) in t.iter().zip(v) {
+            for (a, x) in acc.iter_mut().zip([ti, ti * ti, vi, ti * vi]) {
+                *a += x;
+            }
+            sums.push(acc);
+        }
+        PrefixSums { sums }
+    }
+
+    /// The least-squares line through the points of `range`.
+    fn line(&self, range: std::ops::Range<usize>) -> Line {
+        let (a, b) = (self.sums[range.start], self.sums[range.end]);
+        let m = range.len() as f64;
+        let [st, stt, sv, stv] = std::array::from_fn(|i| b[i] - a[i]);
+        let sxx = stt - st * st / m;
+        let sxy = stv - st * sv / m;
+        let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+        Line { intercept: (sv - slope * st) / m, slope, sxx: sxx.max(f64::MIN_POSITIVE) }
+    }
 }
 
 /// A free flight: lines through x, y and w over its points.
@@ -345,9 +379,9 @@ const SIMULATED_TRACK_SEED: u64 = 0x696d_7061_6374_735f;
 /// simulations as [`super::model::evaluate`]'s with `seed`, their first release), on `threads` threads (0: all
 /// cores; the result does not depend on it). As for rebound heights ([`super::rebound`]): with the tracking noise
 /// declared (`noise_m`) each path is read as its run's track was, at the track's times since release (linear
-/// between the engine's samples, at rest after its end), each height plus Gaussian noise of that sd; undeclared, at
-/// the engine's own samples, as they are (right for exact tracks recorded as the engine records, such as the
-/// synthetic ones).
+/// between the recorded path's points, at rest after its end), each height plus Gaussian noise of that sd;
+/// undeclared, as recorded ([`Prepared::path`](super::model::Prepared::path): 3DRB every millisecond, 2DLM as its
+/// recorder samples), right for exact tracks recorded the same way, such as the synthetic ones.
 ///
 /// # Errors
 /// The candidate does not fit the model.

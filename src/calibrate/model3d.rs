@@ -415,8 +415,9 @@ impl Model3d {
         Ok((terrain, sim, zones))
     }
 
-    /// The path of simulation `repeat` of every run under `seed` with `candidate`: the engine's path samples (time
-    /// since release, centre of mass in the campaign's frame), the same simulations as [`Prepared::simulate`]'s.
+    /// The path of simulation `repeat` of every run under `seed` with `candidate`: a point every millisecond (time
+    /// since release, centre of mass in the campaign's frame; [`TRACK_STEP_S`]), the same simulations as
+    /// [`Prepared::simulate`]'s.
     ///
     /// # Errors
     /// The candidate cannot be realised.
@@ -427,17 +428,61 @@ impl Model3d {
     }
 }
 
-/// Records the path samples of a simulation in the campaign's frame.
+/// Time between the points of a recorded path, s: a tracking system's millisecond.
+pub const TRACK_STEP_S: f64 = 0.001;
+
+/// Engine steps longer than this are free flights (contact steps are the engine's `dt_s`, 2 ms by default), s.
+const FLIGHT_STEP_S: f64 = 0.004;
+
+/// The centre of mass `tau_s` into a free flight from `p0` at velocity `v0` (local frame, z up).
+fn free_flight(p0: Vector3<f64>, v0: Vector3<f64>, tau_s: f64) -> Vector3<f64> {
+    p0 + v0 * tau_s + Vector3::new(0.0, 0.0, -0.5 * crate::sim::GRAVITY_MPS2 * tau_s * tau_s)
+}
+
+/// Records a simulation's path in the campaign's frame as a tracking system would: a point every
+/// [`TRACK_STEP_S`] from the first sample, whatever the engine's steps (up to 0.25 s in flight). Across a flight
+/// step the point is the free flight from the step's start (exact: the engine flies analytically), across a
+/// contact step of a few milliseconds it is linear between the step's ends.
 struct PathRecorder3d<'a> {
     terrain: &'a Terrain,
     points: Vec<TrackPoint>,
+    /// The last sample: time, s; centre and velocity (local frame).
+    last: Option<(f64, Vector3<f64>, Vector3<f64>)>,
+    /// Time of the first sample, s.
+    start_s: f64,
+}
+
+impl<'a> PathRecorder3d<'a> {
+    fn new(terrain: &'a Terrain) -> Self {
+        PathRecorder3d { terrain, points: Vec::new(), last: None, start_s: 0.0 }
+    }
 }
 
 impl Observer for PathRecorder3d<'_> {
     fn sample(&mut self, s: &Sample) {
-        if self.points.last().is_none_or(|q| s.t_s > q.time_s) {
+        let Some((t0, p0, v0)) = self.last else {
+            self.start_s = s.t_s;
             self.points.push(TrackPoint { time_s: s.t_s, position_m: self.terrain.to_file_frame(&s.position_m) });
+            self.last = Some((s.t_s, s.position_m, s.velocity_mps));
+            return;
+        };
+        if s.t_s <= t0 {
+            return;
         }
+        loop {
+            let t = self.start_s + self.points.len() as f64 * TRACK_STEP_S;
+            if t > s.t_s {
+                break;
+            }
+            let tau = t - t0;
+            let p = if s.t_s - t0 > FLIGHT_STEP_S {
+                free_flight(p0, v0, tau)
+            } else {
+                p0 + (s.position_m - p0) * (tau / (s.t_s - t0))
+            };
+            self.points.push(TrackPoint { time_s: t, position_m: self.terrain.to_file_frame(&p) });
+        }
+        self.last = Some((s.t_s, s.position_m, s.velocity_mps));
     }
 }
 
@@ -447,7 +492,7 @@ impl Prepared for Prepared3d<'_> {
     }
 
     fn path(&self, run: &FieldRun, repeat: usize, seed: u64) -> Vec<TrackPoint> {
-        let mut rec = PathRecorder3d { terrain: &self.terrain, points: Vec::new() };
+        let mut rec = PathRecorder3d::new(&self.terrain);
         self.simulate_observed(run, repeat, seed, &mut rec);
         rec.points
     }
@@ -509,6 +554,8 @@ fn slope_deg(n: &Vector3<f64>) -> f64 {
 struct PathObserver3d<'a> {
     terrain: &'a Terrain,
     last: Option<Vector3<f64>>,
+    /// The last sample's time, s, and velocity, m/s (local frame).
+    last_motion: Option<(f64, Vector3<f64>)>,
     summary: PathSummary,
     thinner: PathThinner,
     /// The rebound height so far, if measured.
@@ -518,7 +565,7 @@ struct PathObserver3d<'a> {
 impl<'a> PathObserver3d<'a> {
     fn new(terrain: &'a Terrain, rebound: Option<ReboundMeter<'a>>) -> Self {
         let summary = PathSummary { material_fraction: vec![0.0; terrain.materials.len()], ..Default::default() };
-        PathObserver3d { terrain, last: None, summary, thinner: PathThinner::default(), rebound }
+        PathObserver3d { terrain, last: None, last_motion: None, summary, thinner: PathThinner::default(), rebound }
     }
 }
 
@@ -528,7 +575,19 @@ impl Observer for PathObserver3d<'_> {
         let o = self.terrain.origin;
         self.thinner.offer(x.x + o.x, x.y + o.y, 1.0);
         if let Some(rebound) = &mut self.rebound {
-            rebound.offer(s.t_s, self.terrain.surface.height(x.x, x.y).map_or(f64::NAN, |z| x.z - z));
+            let height = |p: Vector3<f64>| self.terrain.surface.height(p.x, p.y).map_or(f64::NAN, |z| p.z - z);
+            // Across a flight step (up to 0.25 s) the path is read every millisecond, as it is recorded
+            // ([`PathRecorder3d`]): a bounce's apex lies between the step's ends.
+            if let (Some(p0), Some((t0, v0))) = (self.last, self.last_motion) {
+                if s.t_s - t0 > FLIGHT_STEP_S {
+                    let mut t = t0 + TRACK_STEP_S;
+                    while t < s.t_s {
+                        rebound.offer(t, height(free_flight(p0, v0, t - t0)));
+                        t += TRACK_STEP_S;
+                    }
+                }
+            }
+            rebound.offer(s.t_s, height(x));
         }
         if let Some(last) = self.last {
             let step = (x.x - last.x).hypot(x.y - last.y);
@@ -547,6 +606,7 @@ impl Observer for PathObserver3d<'_> {
             }
         }
         self.last = Some(x);
+        self.last_motion = Some((s.t_s, s.velocity_mps));
     }
 
     fn impact(&mut self, i: &Impact) {
