@@ -951,8 +951,8 @@ fn bounces_read_from_exact_tracks_give_back_the_restitution_of_the_model_that_ma
     }
     // 3DRB: rounded boulders of Cr 0.6 (`control_a`, 72 runs), exact tracks. A rigid body's centre bounces off at
     // Cr only when the impulse passes through it: the fast impacts (normal speed 8 m/s and more, the drops) come
-    // back at a median 0.58-0.59; slow ones, where spin turns into a hop off the hull's facets, at about 1 (ours,
-    // measured: 1.08 for 1-3 m/s). So on rigid bodies the apparent restitution falls with impact speed even when Cr
+    // back at a median 0.575; slow ones, where spin turns into a hop off the hull's facets, at about 1 (ours,
+    // measured: 1.088 for 1-3 m/s). So on rigid bodies the apparent restitution falls with impact speed even when Cr
     // does not: compare tracks with simulated tracks, not with Cr.
     let spec =
         Synthetic3d { track_noise_m: Some(0.0), ..talus::calibrate::synthetic::case_3d("control_a", 1).unwrap() };

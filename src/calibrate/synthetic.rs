@@ -620,7 +620,7 @@ pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path) -> Result<()> {
 /// Writes the synthetic 3DRB campaign of `spec` into the folder `dir` as a user's field campaign would be: the
 /// campaign CSVs, the terrain as `terrain.obj` (the synthetic terrain's own triangles), and for boulders their hull
 /// as `boulder.csv`; ready for `talus calibrate DIR --terrain DIR/terrain.obj --model 3drb`. A tracked case also
-/// gets `observed_trajectories.csv`: each run's true path (the engine's path samples, [`Model3d::tracks`]) to 1 mm
+/// gets `observed_trajectories.csv`: each run's true path (a point every millisecond, [`Model3d::tracks`]) to 1 mm
 /// and 1 ms, every height plus Gaussian noise of sd `track_point_noise_m` (0 for exact tracks; with the case's own
 /// `track_noise_m`, the very tracks of the campaign in memory). The files read back give the same runs; the
 /// terrain read from OBJ lies in another local frame, so simulations agree in distribution, not to the bit.
@@ -676,8 +676,8 @@ pub fn write_terrain_campaign(spec: &Synthetic3d, dir: &Path, track_point_noise_
     crate::io::obj::write_obj(&dir.join("terrain.obj"), &mesh)
 }
 
-/// The tracks of `runs` as a tracking system records the true `paths` (each run's path samples, in order): a point
-/// every millisecond (a sample closer in time to the last one kept is left out; times rounded to the millisecond),
+/// The tracks of `runs` as a tracking system records the true `paths` (each run's recorded path, in order; 3DRB a
+/// point every millisecond): times rounded to the millisecond (a point closer in time to the last one kept is left out),
 /// every height plus Gaussian noise of sd `noise_m` from the data's own stream (none when 0), by run id.
 fn observed_tracks(
     runs: &[FieldRun],
