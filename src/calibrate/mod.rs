@@ -171,7 +171,8 @@ pub fn calibrate(
                 }
                 _ => " (too few for a median restitution: flights too short for the tracks' sampling and noise)".into(),
             };
-            log(&format!("{} bounces read from the tracks of {} calibration runs{en} (impacts.csv)", s.n, s.paths));
+            let file = if s.n > 0 { " (impacts.csv)" } else { "" };
+            log(&format!("{} bounces read from the tracks of {} calibration runs{en}{file}", s.n, s.paths));
         }
     } else if cfg.track_noise_m.is_some() {
         log("note: track_noise_m is set but no calibration run is tracked (observed_trajectories.csv): it is unused");

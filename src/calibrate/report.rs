@@ -579,7 +579,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             let _ = writeln!(s, "The tracked heights scatter by {} m around a smooth path (median over the calibration runs, an estimate of the tracking noise; `track_noise_m`: {declared}).\n", fmt(scatter));
         }
         if !r.bounces.is_empty() {
-            let _ = writeln!(s, "Bounces read from the tracks, and from each model's simulated paths read the same way (at the tracks' times, with the declared tracking noise; `impacts.csv` lists the observed ones; docs/calibration.md, \"Impacts read from tracks\"). Only bounces with a readable flight on each side count, and a rigid body's centre does not come back at Cr: compare the rows, not a row with Cr.\n");
+            let _ = writeln!(s, "Bounces read from the tracks, and from each model's simulated paths read the same way (as rebound heights are: at the tracks' times with the declared tracking noise, or as recorded; `impacts.csv` lists the observed ones; docs/calibration.md, \"Impacts read from tracks\"). Only bounces with a readable flight on each side count, and a rigid body's centre does not come back at Cr: compare the rows, not a row with Cr.\n");
             let _ = writeln!(s, "| paths | bounces per path | normal restitution, median (quartiles) | tangential, median | normal impact speed, median m/s |");
             let _ = writeln!(s, "|---|---|---|---|---|");
             for b in &r.bounces {
