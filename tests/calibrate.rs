@@ -760,6 +760,18 @@ fn command_line_reads_tracked_paths_and_reports_rebound_heights() {
     assert!(json["settings"]["rebound_weight"].as_f64().is_some_and(|w| w > 1.0), "{}", json["settings"]);
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(md.contains("### Rebound heights of the tracked runs"), "{md}");
+    // The bounces: every one read from the tracks in impacts.csv (one header, a row per bounce, the calibration runs'
+    // as many as report.json counts), and the table beside the simulated ones.
+    let csv = std::fs::read_to_string(out.join("impacts.csv")).unwrap();
+    assert!(csv.starts_with("trajectory_id,set,time_s,x_m,y_m,z_m,normal_speed_in_mps,"), "{csv}");
+    let cal_rows = csv.lines().filter(|l| l.split(',').nth(1) == Some("calibration")).count();
+    let bounces = &json["bounces"][0];
+    assert_eq!(
+        (bounces["set"].as_str(), bounces["observed"]["n"].as_u64()),
+        (Some("calibration"), Some(cal_rows as u64))
+    );
+    assert!(cal_rows > 20 && bounces["baseline"]["paths"].as_u64().unwrap() > 0, "{bounces}");
+    assert!(md.contains("| observed, calibration (") && md.contains("| baseline, held-out ("), "{md}");
     // The shipped settings that fix the true model read.
     CalibrationConfig::read(&shipped.join("truth.toml")).unwrap();
     // `rebound_weight = 0`: the loop decides as it would without the tracks file.
