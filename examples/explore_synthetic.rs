@@ -10,13 +10,12 @@
 //! each on 2 cores, 3d_designs 15 minutes, mixed_designs 7 minutes, tracks 4 minutes a design)
 use talus::calibrate::config::Objective;
 use talus::calibrate::effects::{EffectKind, MOBILITY_GRID};
-use talus::calibrate::impacts::{summarise, Impact};
+use talus::calibrate::impacts::{observed_summary, simulated_summary};
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::model3d::Model3d;
 use talus::calibrate::objective::{objective, rebound_crps};
 use talus::calibrate::params::{Candidate, EffectSpec, MOBILITY};
-use talus::calibrate::runs::FieldRun;
 use talus::calibrate::synthetic::{
     case_2d, case_3d, material_params_2d, material_params_3d, standard_zone, steep_2d, synthetic_2d, synthetic_3d,
     truth_2d, truth_3d, Hidden, Synthetic2d, Synthetic3d, TRUE_2D,
@@ -240,32 +239,38 @@ fn crps_noise() {
     }
 }
 
-/// The impacts read from the tracks of tracked synthetic cases ([`talus::calibrate::impacts`]), over all runs:
-/// count, median (and quartiles) of the normal restitution, median tangential restitution and normal impact speed.
+/// The bounces read from the tracks of tracked synthetic cases ([`talus::calibrate::impacts`]), over all runs,
+/// beside those of the true model's simulated paths read the same way (20 per run, seed 1): bounces per track,
+/// median (and quartiles) of the normal restitution, median tangential restitution and normal impact speed.
 fn report_impacts(names: &[String]) {
     for name in names {
-        let runs: Vec<FieldRun> = if let Some(spec) = name.strip_prefix("2d_").and_then(|n| case_2d(n, 1)) {
-            synthetic_2d(&spec, Options2d::default()).unwrap().runs().to_vec()
-        } else if let Some(spec) = case_3d(name, 1) {
-            synthetic_3d(&spec, SimParams::default()).unwrap().runs().to_vec()
-        } else {
-            panic!("no case {name}")
-        };
-        let impacts: Vec<&Impact> = runs.iter().flat_map(|r| &r.impacts).collect();
-        let tracked = runs.iter().filter(|r| !r.track_times_s.is_empty()).count();
-        let Some(s) = summarise(&impacts, tracked) else { continue };
-        let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
-        let [a, b] = s.normal_restitution_iqr.map_or([None, None], |q| q.map(Some));
-        println!(
-            "{name:<22} bounces {:>4} in {:>3} tracks  e_n {} [{}, {}]  e_t {}  v_n {} m/s",
-            s.n,
-            s.paths,
-            f(s.normal_restitution_median),
-            f(a),
-            f(b),
-            f(s.tangential_restitution_median),
-            f(s.normal_speed_in_median_mps)
-        );
+        let (model, truth): (Box<dyn Model>, Candidate) =
+            if let Some(spec) = name.strip_prefix("2d_").and_then(|n| case_2d(n, 1)) {
+                (Box::new(synthetic_2d(&spec, Options2d::default()).unwrap()), truth_2d(&spec))
+            } else if let Some(spec) = case_3d(name, 1) {
+                (Box::new(synthetic_3d(&spec, SimParams::default()).unwrap()), truth_3d(&spec))
+            } else {
+                panic!("no case {name}")
+            };
+        let all: Vec<usize> = (0..model.runs().len()).collect();
+        let observed = observed_summary(model.as_ref(), &all);
+        let simulated = simulated_summary(model.as_ref(), &truth, &all, 20, 1, model.track_noise_m(), 0).unwrap();
+        for (what, s) in [("observed", observed), ("truth", simulated)] {
+            let Some(s) = s else { continue };
+            let f = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
+            let [a, b] = s.normal_restitution_iqr.map_or([None, None], |q| q.map(Some));
+            println!(
+                "{name:<22} {what:<8} bounces {:>5} in {:>4} tracks ({:.2} each)  e_n {} [{}, {}]  e_t {}  v_n {} m/s",
+                s.n,
+                s.paths,
+                s.per_path,
+                f(s.normal_restitution_median),
+                f(a),
+                f(b),
+                f(s.tangential_restitution_median),
+                f(s.normal_speed_in_median_mps)
+            );
+        }
     }
 }
 

@@ -149,11 +149,11 @@ pub fn calibrate(
             "{tracked} calibration runs were tracked: each one's rebound-height CRPS counts {:.1} m of run-out",
             cfg.rebound_weight.unwrap_or(0.0)
         ));
-        if let Some(sd) = cfg.track_noise_m {
+        if let Some(sd) = model.track_noise_m() {
             log(&format!("simulated paths are read at the tracks' times with {sd} m of tracking noise"));
         }
         if let Some(scatter) = track_scatter {
-            let hint = if cfg.track_noise_m.is_none() && scatter >= rebound::TRACK_SCATTER_HINT_M {
+            let hint = if model.track_noise_m().is_none() && scatter >= rebound::TRACK_SCATTER_HINT_M {
                 format!(
                     " (tracking noise raises observed rebounds: if it is that, declare track_noise_m = {scatter:.2})"
                 )
@@ -222,7 +222,7 @@ pub fn calibrate(
     for (set, which) in [("calibration", cal), ("holdout", hold)] {
         if let Some(observed) = impacts::observed_summary(model, which) {
             let read = |c: &Candidate| {
-                impacts::simulated_summary(model, c, which, cfg.repeats, cfg.seed, cfg.track_noise_m, cfg.threads)
+                impacts::simulated_summary(model, c, which, cfg.repeats, cfg.seed, model.track_noise_m(), cfg.threads)
             };
             let baseline_b = read(&baseline)?;
             let final_b = if final_c == baseline { baseline_b.clone() } else { read(&final_c)? };

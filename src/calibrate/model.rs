@@ -152,6 +152,12 @@ pub trait Model: Sync {
     fn map_frame(&self) -> MapFrame;
     /// Releases of a simulated rock, at most ([`super::config::CalibrationConfig::release_attempts`]).
     fn release_attempts(&self) -> usize;
+    /// The declared tracking noise under which simulated paths of tracked runs are read, m
+    /// ([`super::config::CalibrationConfig::track_noise_m`] for a campaign read from files, the case's own for a
+    /// synthetic one).
+    fn track_noise_m(&self) -> Option<f64> {
+        None
+    }
     /// The bounces of `track` (campaign frame) over this model's ground, read under height noise of sd `noise_m`
     /// ([`super::impacts::read_impacts`]); none where the model has no ground to read them on.
     fn read_impacts(&self, _track: &[TrackPoint], _noise_m: f64) -> Vec<super::impacts::Impact> {

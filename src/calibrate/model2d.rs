@@ -234,6 +234,10 @@ impl Model for Model2d {
         self.release_attempts
     }
 
+    fn track_noise_m(&self) -> Option<f64> {
+        self.track_noise_m
+    }
+
     fn map_frame(&self) -> MapFrame {
         let (x0, x1) = self.profile.x_range_m();
         MapFrame { dem: None, extent_m: [x0, -0.5, x1, 0.5], cell_m: ((x1 - x0) / 100.0).max(0.5), profile: true }

@@ -309,6 +309,10 @@ impl Model for Model3d {
         self.release_attempts
     }
 
+    fn track_noise_m(&self) -> Option<f64> {
+        self.track_noise_m
+    }
+
     fn read_impacts(&self, track: &[TrackPoint], noise_m: f64) -> Vec<super::impacts::Impact> {
         let local: Vec<TrackPoint> = track
             .iter()

@@ -298,6 +298,9 @@ impl Model for NullModel<'_> {
     fn release_attempts(&self) -> usize {
         self.inner.release_attempts()
     }
+    fn track_noise_m(&self) -> Option<f64> {
+        self.inner.track_noise_m()
+    }
     fn prepare<'a>(
         &'a self,
         candidate: &super::params::Candidate,
