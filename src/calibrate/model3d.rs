@@ -435,7 +435,8 @@ impl Model3d {
 /// Time between the points of a recorded path, s: a tracking system's millisecond.
 pub const TRACK_STEP_S: f64 = 0.001;
 
-/// Engine steps longer than this are free flights (contact steps are the engine's `dt_s`, 2 ms by default), s.
+/// Between samples sent after every step ([`Observer::every_step`]) a gap longer than this is a free flight (contact
+/// steps are the engine's `dt_s`, 2 ms by default; a flight sends a sample at least every 0.1 s), s.
 const FLIGHT_STEP_S: f64 = 0.004;
 
 /// The centre of mass `tau_s` into a free flight from `p0` at velocity `v0` (local frame, z up).
@@ -463,6 +464,10 @@ impl<'a> PathRecorder3d<'a> {
 }
 
 impl Observer for PathRecorder3d<'_> {
+    fn every_step(&self) -> bool {
+        true
+    }
+
     fn sample(&mut self, s: &Sample) {
         let Some((t0, p0, v0)) = self.last else {
             self.start_s = s.t_s;
@@ -574,6 +579,11 @@ impl<'a> PathObserver3d<'a> {
 }
 
 impl Observer for PathObserver3d<'_> {
+    /// Every step where the rebound is measured: a flight is then read every millisecond from the step before it.
+    fn every_step(&self) -> bool {
+        self.rebound.is_some()
+    }
+
     fn sample(&mut self, s: &Sample) {
         let x = s.position_m;
         let o = self.terrain.origin;

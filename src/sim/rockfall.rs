@@ -109,6 +109,12 @@ pub struct Impact {
 pub trait Observer {
     /// A path sample.
     fn sample(&mut self, _sample: &Sample) {}
+    /// True to be sent a sample after every step (contact steps are `dt_s` apart; a flight step sends one every
+    /// 0.1 s or `sample_spacing_m` anyway) instead of about every `sample_spacing_m`: for recording a path as a
+    /// tracking system would. Observing changes nothing in the motion.
+    fn every_step(&self) -> bool {
+        false
+    }
     /// An impact.
     fn impact(&mut self, _impact: &Impact) {}
     /// A barrier met.
@@ -120,6 +126,9 @@ impl Observer for () {}
 impl<O: Observer + ?Sized> Observer for &mut O {
     fn sample(&mut self, s: &Sample) {
         (**self).sample(s);
+    }
+    fn every_step(&self) -> bool {
+        (**self).every_step()
     }
     fn impact(&mut self, i: &Impact) {
         (**self).impact(i);
@@ -133,6 +142,9 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
     fn sample(&mut self, s: &Sample) {
         self.0.sample(s);
         self.1.sample(s);
+    }
+    fn every_step(&self) -> bool {
+        self.0.every_step() || self.1.every_step()
     }
     fn impact(&mut self, i: &Impact) {
         self.0.impact(i);
@@ -149,6 +161,9 @@ impl<O: Observer> Observer for Option<O> {
         if let Some(o) = self {
             o.sample(s)
         }
+    }
+    fn every_step(&self) -> bool {
+        self.as_ref().is_some_and(|o| o.every_step())
     }
     fn impact(&mut self, i: &Impact) {
         if let Some(o) = self {
@@ -642,7 +657,7 @@ impl<'a> Run<'a> {
         let (tr, total) = self.kinetic(&self.s);
         self.out.max_kinetic_j = self.out.max_kinetic_j.max(total);
         let x = self.s.position_m;
-        if !force {
+        if !force && !observer.every_step() {
             if let Some((last, t_last)) = self.last_sample {
                 let d2 = (x.x - last.x).powi(2) + (x.y - last.y).powi(2);
                 if d2 < self.params.sample_spacing_m.powi(2) && self.t - t_last < 0.1 {
