@@ -127,8 +127,8 @@ pub struct MapFrame {
 pub trait Prepared: Sync {
     /// Simulates repeat `repeat` of `run` with streams from `seed`.
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim;
-    /// The path of that simulation (time since release, centre of mass in the campaign's frame), as the engine
-    /// samples it; empty where the model does not record paths.
+    /// The path of that simulation (time since release, centre of mass in the campaign's frame) as a tracking
+    /// system records it (3DRB every millisecond, 2DLM as its recorder samples); empty where the model records none.
     fn path(&self, _run: &FieldRun, _repeat: usize, _seed: u64) -> Vec<TrackPoint> {
         Vec::new()
     }
