@@ -79,27 +79,27 @@ pub fn read_impacts(track: &[TrackPoint], noise_m: f64, ground_m: &dyn Fn(f64, f
     let w: Vec<f64> = track.iter().zip(&t).map(|(p, &t)| p.position_m[2] + 0.5 * g * t * t).collect();
     let sigma = noise_m.max(1e-3);
     // 1. Candidates.
-    let side = |k: usize, forward: bool| -> std::ops::Range<usize> {
-        let mut j = k;
-        if forward {
-            while j + 1 < n && (t[j + 1] - t[k] <= WINDOW_S || j < k + 1) {
-                j += 1;
-            }
-            k..j + 1
-        } else {
-            while j > 0 && (t[k] - t[j - 1] <= WINDOW_S || j + 1 > k) {
-                j -= 1;
-            }
-            j..k + 1
+    // The window of each point: the points within WINDOW_S before it (at least one) and after it (at least one),
+    // found in one sweep (times ascend, so both ends only move forward).
+    let (mut before, mut after) = (vec![0; n], vec![0; n]);
+    let (mut lo, mut hi) = (0, 0);
+    for k in 0..n {
+        while t[k] - t[lo] > WINDOW_S {
+            lo += 1;
         }
-    };
+        while hi + 1 < n && t[hi + 1] - t[k] <= WINDOW_S {
+            hi += 1;
+        }
+        before[k] = lo.min(k.saturating_sub(1));
+        after[k] = hi.max((k + 1).min(n - 1));
+    }
     let sums = PrefixSums::new(&t, &w);
     let gain: Vec<f64> = (0..n)
         .map(|k| {
             if k == 0 || k + 1 == n {
                 return 0.0;
             }
-            let (l, r) = (sums.line(side(k, false)), sums.line(side(k, true)));
+            let (l, r) = (sums.line(before[k]..k + 1), sums.line(k..after[k] + 1));
             let se = sigma * (1.0 / l.sxx + 1.0 / r.sxx).sqrt();
             let gain = r.slope - l.slope;
             if gain >= MIN_GAIN_MPS.max(5.0 * se) {
@@ -111,9 +111,7 @@ pub fn read_impacts(track: &[TrackPoint], noise_m: f64, ground_m: &dyn Fn(f64, f
         .collect();
     let candidates: Vec<usize> = (1..n - 1)
         .filter(|&k| {
-            gain[k] > 0.0
-                && (side(k, false).start..side(k, true).end)
-                    .all(|j| gain[j] < gain[k] || (gain[j] == gain[k] && j >= k))
+            gain[k] > 0.0 && (before[k]..after[k] + 1).all(|j| gain[j] < gain[k] || (gain[j] == gain[k] && j >= k))
         })
         .collect();
     // 2. Flights between them.
