@@ -219,8 +219,9 @@ pub fn calibrate(
         .cloned()
         .unwrap_or_else(|| diagnose::diagnose(model, &base_cal, cfg.effects.permutations, cfg.seed).1);
     let mut bounces = Vec::new();
-    for (set, which) in [("calibration", cal), ("holdout", hold)] {
-        if let Some(observed) = impacts::observed_summary(model, which) {
+    let observed_hold = impacts::observed_summary(model, hold);
+    for (set, which, observed) in [("calibration", cal, impact_summary), ("holdout", hold, observed_hold)] {
+        if let Some(observed) = observed {
             let read = |c: &Candidate| {
                 impacts::simulated_summary(model, c, which, cfg.repeats, cfg.seed, model.track_noise_m(), cfg.threads)
             };

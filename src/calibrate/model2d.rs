@@ -7,7 +7,7 @@ use super::effects::EffectKind;
 use super::impacts::{read_impacts, Impact};
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
-use super::rebound::{attach_track, rebound_meter, ReboundMeter};
+use super::rebound::{attach_tracks, rebound_meter, ReboundMeter};
 use super::runs::FieldRun;
 use super::scenario_file;
 use crate::campaign::{Campaign, TrackPoint};
@@ -111,17 +111,14 @@ impl Model2d {
         track_noise_m: Option<f64>,
     ) -> Result<Model2d> {
         self.track_noise_m = track_noise_m;
-        for k in 0..self.runs.len() {
-            if let Some(track) = tracks.get(&self.runs[k].id) {
-                let profile = &self.profile;
-                let heights =
-                    track.iter().map(|q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z));
-                attach_track(&mut self.runs[k], track, heights.collect())?;
-                let noise_m = track_noise_m.or(self.runs[k].track_scatter_m).unwrap_or(0.0);
-                self.runs[k].impacts = self.read_impacts(track, noise_m);
-                self.rebounds = true;
-            }
-        }
+        let profile = &self.profile;
+        self.rebounds |= attach_tracks(
+            &mut self.runs,
+            tracks,
+            track_noise_m,
+            |q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z),
+            |track, noise_m| profile_impacts(profile, track, noise_m),
+        )?;
         Ok(self)
     }
 
@@ -244,7 +241,7 @@ impl Model for Model2d {
     }
 
     fn read_impacts(&self, track: &[TrackPoint], noise_m: f64) -> Vec<Impact> {
-        read_impacts(track, noise_m, &|x, _| self.profile.z_at(x))
+        profile_impacts(&self.profile, track, noise_m)
     }
 
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>> {
@@ -413,6 +410,11 @@ impl Model2d {
         }
         track
     }
+}
+
+/// The bounces of `track` (x along `profile`, z up) over the profile ([`read_impacts`]).
+fn profile_impacts(profile: &Profile, track: &[TrackPoint], noise_m: f64) -> Vec<Impact> {
+    read_impacts(track, noise_m, &|x, _| profile.z_at(x))
 }
 
 /// Slope (degrees) and material index of the profile at x (the first segment there).

@@ -7,7 +7,7 @@ use super::effects::EffectKind;
 use super::impacts::read_impacts;
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
-use super::rebound::{attach_track, rebound_meter, ReboundMeter};
+use super::rebound::{attach_tracks, rebound_meter, ReboundMeter};
 use super::runs::FieldRun;
 use super::scenario_file;
 use crate::campaign::{Campaign, TrackPoint};
@@ -174,21 +174,17 @@ impl Model3d {
         track_noise_m: Option<f64>,
     ) -> Result<Model3d> {
         self.track_noise_m = track_noise_m;
-        for k in 0..self.runs.len() {
-            if let Some(track) = tracks.get(&self.runs[k].id) {
-                let heights = track
-                    .iter()
-                    .map(|q| {
-                        let p = self.local(q.position_m);
-                        self.terrain.surface.height(p.x, p.y).map_or(f64::NAN, |z| p.z - z)
-                    })
-                    .collect();
-                attach_track(&mut self.runs[k], track, heights)?;
-                let noise_m = track_noise_m.or(self.runs[k].track_scatter_m).unwrap_or(0.0);
-                self.runs[k].impacts = self.read_impacts(track, noise_m);
-                self.rebounds = true;
-            }
-        }
+        let terrain = &self.terrain;
+        self.rebounds |= attach_tracks(
+            &mut self.runs,
+            tracks,
+            track_noise_m,
+            |q| {
+                let p = to_local(terrain, q.position_m);
+                terrain.surface.height(p.x, p.y).map_or(f64::NAN, |z| p.z - z)
+            },
+            |track, noise_m| terrain_impacts(terrain, track, noise_m),
+        )?;
         Ok(self)
     }
 
@@ -204,7 +200,7 @@ impl Model3d {
     }
 
     fn local(&self, p: [f64; 3]) -> Vector3<f64> {
-        self.terrain.up.to_internal(p) - self.terrain.origin
+        to_local(&self.terrain, p)
     }
 
     fn material(params: &Params, prefix: &str, name: &str, m: f64) -> Result<Material> {
@@ -314,16 +310,7 @@ impl Model for Model3d {
     }
 
     fn read_impacts(&self, track: &[TrackPoint], noise_m: f64) -> Vec<super::impacts::Impact> {
-        let local: Vec<TrackPoint> = track
-            .iter()
-            .map(|q| TrackPoint { time_s: q.time_s, position_m: self.local(q.position_m).into() })
-            .collect();
-        let surface = &self.terrain.surface;
-        let mut impacts = read_impacts(&local, noise_m, &|x, y| surface.height(x, y));
-        for imp in &mut impacts {
-            imp.position_m = track[imp.point].position_m;
-        }
-        impacts
+        terrain_impacts(&self.terrain, track, noise_m)
     }
 
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>> {
@@ -430,6 +417,25 @@ impl Model3d {
         let prepared = Prepared3d { model: self, terrain, sim };
         Ok(self.runs.iter().map(|run| prepared.path(run, repeat, seed)).collect())
     }
+}
+
+/// A point of the campaign's frame in `terrain`'s local frame.
+fn to_local(terrain: &Terrain, p: [f64; 3]) -> Vector3<f64> {
+    terrain.up.to_internal(p) - terrain.origin
+}
+
+/// The bounces of `track` (campaign frame) over `terrain` ([`read_impacts`], read in the local frame, each
+/// bounce's position given back in the campaign's).
+fn terrain_impacts(terrain: &Terrain, track: &[TrackPoint], noise_m: f64) -> Vec<super::impacts::Impact> {
+    let local: Vec<TrackPoint> = track
+        .iter()
+        .map(|q| TrackPoint { time_s: q.time_s, position_m: to_local(terrain, q.position_m).into() })
+        .collect();
+    let mut impacts = read_impacts(&local, noise_m, &|x, y| terrain.surface.height(x, y));
+    for imp in &mut impacts {
+        imp.position_m = track[imp.point].position_m;
+    }
+    impacts
 }
 
 /// Time between the points of a recorded path, s: a tracking system's millisecond.

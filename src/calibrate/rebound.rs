@@ -11,11 +11,13 @@
 //! track's own times, each height plus noise of that sd, so the noise raises both alike (ours: a forward model of
 //! the tracking system, in place of smoothing the track).
 
+use super::impacts::Impact;
 use super::runs::FieldRun;
 use super::stats::median;
 use crate::campaign::TrackPoint;
 use crate::error::{Error, Result};
 use crate::random::{standard_normal, stream, Rng};
+use std::collections::BTreeMap;
 
 /// Streams heights above the ground and keeps the largest rise over the lowest earlier height.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -171,6 +173,31 @@ pub fn rebound_height_m(heights_m: impl IntoIterator<Item = f64>) -> f64 {
         r.offer(h);
     }
     r.height_m()
+}
+
+/// Gives each run of `runs` that has a track in `tracks` (by run id) its tracked path ([`attach_track`], with
+/// `height_m` the height of a track point above the ground, non-finite off it) and the bounces `read` reads from
+/// it under the declared tracking noise `track_noise_m` or, undeclared, the track's own scatter. True if any run
+/// is tracked.
+///
+/// # Errors
+/// As [`attach_track`].
+pub fn attach_tracks(
+    runs: &mut [FieldRun],
+    tracks: &BTreeMap<String, Vec<TrackPoint>>,
+    track_noise_m: Option<f64>,
+    height_m: impl Fn(&TrackPoint) -> f64,
+    read: impl Fn(&[TrackPoint], f64) -> Vec<Impact>,
+) -> Result<bool> {
+    let mut any = false;
+    for run in runs.iter_mut() {
+        if let Some(track) = tracks.get(&run.id) {
+            attach_track(run, track, track.iter().map(&height_m).collect())?;
+            run.impacts = read(track, track_noise_m.or(run.track_scatter_m).unwrap_or(0.0));
+            any = true;
+        }
+    }
+    Ok(any)
 }
 
 /// Gives `run` its tracked path: the observed rebound height from the heights of the track's points above the
