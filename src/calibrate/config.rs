@@ -228,7 +228,8 @@ pub struct EffectsConfig {
     /// Largest permutation p-value of a signature covariate (or of the deposition check for zones) for proposing
     /// an effect (default 0.05; the cross-validation, not this, decides).
     pub propose_alpha: f64,
-    /// Most effects proposed per round, strongest signature first (default 4).
+    /// Most effects proposed per round, strongest signature first (default 4), besides those the bounces read from
+    /// tracks point at (always tried).
     pub max_proposals: usize,
     /// Most rounds (default 3).
     pub max_rounds: usize,

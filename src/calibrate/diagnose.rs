@@ -18,14 +18,15 @@ use serde::{Deserialize, Serialize};
 pub struct Diagnostic {
     /// Covariate name.
     pub covariate: String,
-    /// `runout` (observed − median simulated run-out), `endpoint_offset` or `rebound` (observed − median
-    /// simulated rebound height, tracked runs only).
+    /// `runout` (observed − median simulated run-out), `endpoint_offset`, `rebound` (observed − median
+    /// simulated rebound height, tracked runs only) or `bounce_restitution` (an observed bounce's rank among
+    /// simulated ones, [`super::impacts::bounce_diagnostics`]).
     pub residual: String,
     /// Spearman's rank correlation.
     pub spearman_rho: f64,
     /// Two-sided permutation p-value.
     pub p_value: f64,
-    /// Runs.
+    /// Runs (bounces for `bounce_restitution`).
     pub n: usize,
 }
 
@@ -168,8 +169,13 @@ pub fn diagnose(model: &dyn Model, sims: &[RunSims], permutations: usize, seed: 
             });
         }
     }
-    out.sort_by(|a, b| a.p_value.total_cmp(&b.p_value).then(b.spearman_rho.abs().total_cmp(&a.spearman_rho.abs())));
+    out.sort_by(by_strength);
     (cov, out)
+}
+
+/// Diagnostics in order of strength: smallest p-value first, then largest |rho|.
+pub fn by_strength(a: &Diagnostic, b: &Diagnostic) -> std::cmp::Ordering {
+    a.p_value.total_cmp(&b.p_value).then(b.spearman_rho.abs().total_cmp(&a.spearman_rho.abs()))
 }
 
 /// The covariate name of [`spread_check`].

@@ -7,6 +7,7 @@
 
 use super::config::ModelKind;
 use super::diagnose::{DEPOSITION_EXCESS, OUTSIDE_RANGE};
+use super::impacts::{BOUNCE_INCIDENCE, BOUNCE_NORMAL_SPEED};
 use serde::{Deserialize, Serialize};
 
 /// An effect the loop can add.
@@ -103,7 +104,14 @@ const SPEED_3D: EffectDef = EffectDef {
     param: Some("k_mps"),
     grid: &[3.0, 6.0, 12.0, 25.0],
     bounds: (1.0, 60.0),
-    signature: &["release_height_m", "drop_height_m", "impact_speed_mean_mps", "impact_speed_max_mps", "initial_speed_mps"],
+    signature: &[
+        "release_height_m",
+        "drop_height_m",
+        "impact_speed_mean_mps",
+        "impact_speed_max_mps",
+        "initial_speed_mps",
+        BOUNCE_NORMAL_SPEED,
+    ],
     formula: "Cr' = Cr / (1 + (v_n/K)^2), v_n the normal approach speed (Pfeiffer & Bowen 1989, physics.md §3-4; their K = 9.144 m/s)",
 };
 
@@ -113,7 +121,7 @@ const ANGLE_3D: EffectDef = EffectDef {
     param: Some("exponent"),
     grid: &[-0.6, -0.3, 0.3, 0.6],
     bounds: (-1.5, 1.5),
-    signature: &["impact_angle_mean_deg", "path_slope_mean_deg"],
+    signature: &["impact_angle_mean_deg", "path_slope_mean_deg", BOUNCE_INCIDENCE],
     formula: "Cr' = min(1, Cr (max(theta, 5 deg)/30 deg)^-a), theta the impact angle (after Wyllie 2014, e_n = 19.5 theta^-1.03; physics.md §4)",
 };
 

@@ -23,10 +23,11 @@
 //!    ground before and leave it after; the last landing (after which the rock rolls) has no outgoing flight and is
 //!    not an impact here.
 
+use super::diagnose::Diagnostic;
 use super::model::Model;
 use super::params::Candidate;
 use super::runs::FieldRun;
-use super::stats::{median, quantile_sorted, sorted};
+use super::stats::{median, quantile_sorted, sorted, spearman_permutation};
 use crate::campaign::TrackPoint;
 use crate::error::Result;
 use crate::random::{standard_normal, stream, Rng};
@@ -304,8 +305,9 @@ fn det3(a: [[f64; 3]; 3]) -> f64 {
 /// whose flights on both sides are readable count, so low bounces (short flights) are missed, more so on noisy
 /// tracks, and on a rigid body the centre's restitution is not Cr (spin gives and takes): compare the observed
 /// tracks with the model's simulated paths read the same way ([`simulated_summary`]), not with the model's
-/// coefficients. For the same reason no correlation of restitution with impact speed is reported: at a given
-/// incoming speed only bounces that leave fast enough are read, which alone makes the restitution fall with speed.
+/// coefficients. For the same reason the correlation of restitution with impact speed is not reported as such: at
+/// a given incoming speed only bounces that leave fast enough are read, which alone makes the restitution fall with
+/// speed; [`bounce_diagnostics`] compares each observed bounce with simulated ones at its speed instead.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ImpactSummary {
     /// Tracked paths read (simulated: runs × repeats).
@@ -375,15 +377,16 @@ const SIMULATED_TRACK_SEED: u64 = 0x696d_7061_6374_735f;
 
 /// The bounces of `candidate`'s simulated paths of the tracked runs among `runs`, `repeats` each (the same
 /// simulations as [`super::model::evaluate`]'s with `seed`, their first release), on `threads` threads (0: all
-/// cores; the result does not depend on it). As for rebound heights ([`super::rebound`]): with the tracking noise
-/// declared (`noise_m`) each path is read as its run's track was, at the track's times since release (linear
-/// between the recorded path's points, at rest after its end), each height plus Gaussian noise of that sd;
-/// undeclared, as recorded ([`Prepared::path`](super::model::Prepared::path): 3DRB every millisecond, 2DLM as its
-/// recorder samples), right for exact tracks recorded the same way, such as the synthetic ones.
+/// cores; the result does not depend on it): one entry per tracked run, its index and the bounces of all its
+/// repeats. As for rebound heights ([`super::rebound`]): with the tracking noise declared (`noise_m`) each path is
+/// read as its run's track was, at the track's times since release (linear between the recorded path's points, at
+/// rest after its end), each height plus Gaussian noise of that sd; undeclared, as recorded
+/// ([`Prepared::path`](super::model::Prepared::path): 3DRB every millisecond, 2DLM as its recorder samples), right
+/// for exact tracks recorded the same way, such as the synthetic ones.
 ///
 /// # Errors
 /// The candidate does not fit the model.
-pub fn simulated_summary(
+pub fn simulated_impacts(
     model: &dyn Model,
     candidate: &Candidate,
     runs: &[usize],
@@ -391,16 +394,12 @@ pub fn simulated_summary(
     seed: u64,
     noise_m: Option<f64>,
     threads: usize,
-) -> Result<Option<ImpactSummary>> {
+) -> Result<Vec<(usize, Vec<Impact>)>> {
     let prepared = model.prepare(candidate)?;
-    let jobs: Vec<(&FieldRun, usize)> = runs
-        .iter()
-        .map(|&i| &model.runs()[i])
-        .filter(|r| !r.track_times_s.is_empty())
-        .flat_map(|r| (0..repeats).map(move |k| (r, k)))
-        .collect();
-    let read: Vec<Vec<Impact>> = crate::parallel::collect_in_order(jobs.len(), threads, |k| {
-        let (run, repeat) = jobs[k];
+    let tracked: Vec<&FieldRun> =
+        runs.iter().map(|&i| &model.runs()[i]).filter(|r| !r.track_times_s.is_empty()).collect();
+    let read: Vec<Vec<Impact>> = crate::parallel::collect_in_order(tracked.len() * repeats, threads, |k| {
+        let (run, repeat) = (tracked[k / repeats], k % repeats);
         let path = prepared.path(run, repeat, seed);
         match noise_m {
             Some(sd) => {
@@ -410,8 +409,90 @@ pub fn simulated_summary(
             None => model.read_impacts(&path, 0.0),
         }
     });
-    let impacts: Vec<&Impact> = read.iter().flatten().collect();
-    Ok(summarise(&impacts, jobs.len()))
+    Ok(tracked
+        .iter()
+        .zip(read.chunks(repeats.max(1)))
+        .map(|(run, per_repeat)| (run.index, per_repeat.iter().flatten().cloned().collect()))
+        .collect())
+}
+
+/// The summary of [`simulated_impacts`]'s bounces, `repeats` paths per run.
+pub fn simulated_summary(simulated: &[(usize, Vec<Impact>)], repeats: usize) -> Option<ImpactSummary> {
+    let impacts: Vec<&Impact> = simulated.iter().flat_map(|(_, i)| i).collect();
+    summarise(&impacts, simulated.len() * repeats)
+}
+
+/// The residual name of [`bounce_diagnostics`].
+pub const BOUNCE_RESIDUAL: &str = "bounce_restitution";
+/// Its covariates: the normal impact speed and the incidence of an observed bounce.
+pub const BOUNCE_NORMAL_SPEED: &str = "bounce_normal_speed_mps";
+/// See [`BOUNCE_NORMAL_SPEED`].
+pub const BOUNCE_INCIDENCE: &str = "bounce_incidence_deg";
+/// The permutations' random stream (with the settings' seed).
+const BOUNCE_STREAM: u64 = u64::MAX - 7000;
+/// Simulated bounces of its own run an observed bounce is ranked among (ours).
+pub const BOUNCE_NEIGHBOURS: usize = 15;
+/// Fewest observed bounces for a bounce diagnostic (ours).
+pub const MIN_BOUNCES_DIAGNOSED: usize = 20;
+
+/// Does the model's normal restitution miss the tracks' in a way that changes with impact speed or incidence (ours)?
+/// Each observed bounce is ranked among the [`BOUNCE_NEIGHBOURS`] simulated bounces of its own run (`simulated`,
+/// from [`simulated_impacts`]) nearest to it in the covariate, each moved to the observed covariate along their
+/// least-squares line of restitution on it: u = the share of them that came back slower (ties half). Where the model is right, u is uniform whatever the covariate, because both sides are read the same way
+/// and compared at the same speed or incidence: the reading's selection (only bounces that leave fast enough are
+/// read) and a rigid body's apparent restitution falling with speed at constant Cr are in the simulated bounces
+/// too. A restitution that falls with speed where the model's does not makes u fall with the speed. Returns, per
+/// covariate, Spearman's rho of u against it with a permutation p-value over the bounces (residual
+/// [`BOUNCE_RESIDUAL`]); nothing under [`MIN_BOUNCES_DIAGNOSED`] bounces. Bounces of one path are treated as
+/// independent given the model.
+pub fn bounce_diagnostics(
+    runs: &[FieldRun],
+    simulated: &[(usize, Vec<Impact>)],
+    permutations: usize,
+    seed: u64,
+) -> Vec<Diagnostic> {
+    let mut rng = stream(seed, BOUNCE_STREAM);
+    type Key = fn(&Impact) -> f64;
+    let covariates: [(&str, Key); 2] =
+        [(BOUNCE_NORMAL_SPEED, |i| i.normal_speed_in_mps), (BOUNCE_INCIDENCE, |i| i.incidence_deg)];
+    let mut out = Vec::new();
+    for (name, key) in covariates {
+        let (mut x, mut u) = (Vec::new(), Vec::new());
+        for (run, sim) in simulated.iter().filter(|(_, s)| s.len() >= BOUNCE_NEIGHBOURS) {
+            for o in &runs[*run].impacts {
+                let mut near: Vec<&Impact> = sim.iter().collect();
+                near.sort_by(|a, b| (key(a) - key(o)).abs().total_cmp(&(key(b) - key(o)).abs()));
+                let near = &near[..BOUNCE_NEIGHBOURS];
+                // Each neighbour moved to the observed bounce's covariate along the neighbours' own trend, so that
+                // a bounce at the edge of the simulated range is not ranked among bounces all on one side of it.
+                let c: Vec<f64> = near.iter().map(|s| key(s)).collect();
+                let e: Vec<f64> = near.iter().map(|s| s.normal_restitution).collect();
+                let trend = line(&c, &e, 0..near.len()).slope;
+                let below: f64 = c
+                    .iter()
+                    .zip(&e)
+                    .map(|(c, e)| match (e + trend * (key(o) - c)).total_cmp(&o.normal_restitution) {
+                        std::cmp::Ordering::Less => 1.0,
+                        std::cmp::Ordering::Equal => 0.5,
+                        std::cmp::Ordering::Greater => 0.0,
+                    })
+                    .sum();
+                x.push(key(o));
+                u.push(below / BOUNCE_NEIGHBOURS as f64);
+            }
+        }
+        if x.len() >= MIN_BOUNCES_DIAGNOSED {
+            let (rho, p) = spearman_permutation(&x, &u, permutations, &mut rng);
+            out.push(Diagnostic {
+                covariate: name.into(),
+                residual: BOUNCE_RESIDUAL.into(),
+                spearman_rho: rho,
+                p_value: p,
+                n: x.len(),
+            });
+        }
+    }
+    out
 }
 
 /// `path` (times since release) read at `times_s` (since release): linear between its samples, its last position
@@ -545,5 +626,63 @@ mod tests {
                 .collect()
         };
         assert!(read_impacts(&rolling, 0.05, &|_, _| Some(0.0)).is_empty());
+    }
+
+    /// A bounce at normal speed `v` and incidence `deg` with normal restitution `en`.
+    fn bounce(v: f64, deg: f64, en: f64) -> Impact {
+        Impact {
+            time_s: 0.0,
+            point: 0,
+            position_m: [0.0; 3],
+            normal_speed_in_mps: v,
+            tangential_speed_in_mps: 1.0,
+            incidence_deg: deg,
+            normal_restitution: en,
+            tangential_restitution: None,
+        }
+    }
+
+    #[test]
+    fn bounce_diagnostics_see_a_restitution_falling_with_speed_that_the_model_lacks_and_nothing_where_it_has_it() {
+        // Ten runs; the model's bounces (60 per run) come back at Cr 0.6 minus a reading's fall with speed that both
+        // sides share (−0.04 per m/s), with scatter; the tracks (8 bounces a run) either the same (null) or with a
+        // restitution that also falls as 1 / (1 + (v/6)²) around the median speed (the hidden effect).
+        let mut rng = stream(11, 0);
+        let draw = |hidden: bool, rng: &mut Rng| {
+            let v = crate::random::uniform_in(rng, 2.0, 12.0);
+            let deg = crate::random::uniform_in(rng, 20.0, 70.0);
+            let shared = 0.6 - 0.04 * (v - 7.0) + 0.05 * standard_normal(rng);
+            let en = if hidden {
+                shared * 2.0 / (1.0 + (v / 6.0) * (v / 6.0)) * (1.0 + (7.0f64 / 6.0).powi(2)) / 2.0
+            } else {
+                shared
+            };
+            bounce(v, deg, en)
+        };
+        for hidden in [false, true] {
+            let mut runs = Vec::new();
+            let mut simulated = Vec::new();
+            for i in 0..10 {
+                let mut run = crate::calibrate::metrics::tests::run(i, 0, 50.0);
+                run.impacts = (0..8).map(|_| draw(hidden, &mut rng)).collect();
+                runs.push(run);
+                simulated.push((i, (0..60).map(|_| draw(false, &mut rng)).collect::<Vec<_>>()));
+            }
+            let d = bounce_diagnostics(&runs, &simulated, 999, 1);
+            assert_eq!(d.len(), 2);
+            let speed = d.iter().find(|d| d.covariate == BOUNCE_NORMAL_SPEED).unwrap();
+            let incidence = d.iter().find(|d| d.covariate == BOUNCE_INCIDENCE).unwrap();
+            assert_eq!((speed.n, speed.residual.as_str()), (80, BOUNCE_RESIDUAL));
+            // The incidence is independent of the restitution here: no signal either way.
+            assert!(incidence.p_value > 0.05, "{incidence:?}");
+            if hidden {
+                assert!(speed.spearman_rho < -0.4 && speed.p_value < 0.01, "{speed:?}");
+            } else {
+                assert!(speed.p_value > 0.05, "{speed:?}");
+            }
+        }
+        // Too few bounces: nothing.
+        let runs = vec![crate::calibrate::metrics::tests::run(0, 0, 50.0)];
+        assert!(bounce_diagnostics(&runs, &[(0, vec![bounce(5.0, 45.0, 0.5); 20])], 99, 1).is_empty());
     }
 }

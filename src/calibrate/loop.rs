@@ -36,12 +36,13 @@
 //! cut), then refitted with the optimiser (together with the base parameters), and the loop starts again.
 
 use super::config::{CalibrationConfig, ModelKind};
-use super::diagnose::{diagnose, spread_check, Diagnostic, DEPOSITION_EXCESS};
+use super::diagnose::{by_strength, diagnose, spread_check, Diagnostic, DEPOSITION_EXCESS};
 use super::effects::{
     definition, effects_for, recentring, EffectDef, EffectKind, Recentring, CR_SCALE_GRID, MOBILITY_GRID,
     ZONE_DRAG_GRID, ZONE_MOBILITY_GRID,
 };
 use super::fit::{fit, Context};
+use super::impacts::{self, BOUNCE_RESIDUAL};
 use super::model::{Model, RunSims, Sim};
 use super::objective::{run_score, score, score_of};
 use super::params::{
@@ -149,7 +150,24 @@ pub fn effects_loop(
     for round in 1..=cfg.effects.max_rounds {
         (ctx.log)(&format!("effects loop, round {round}: diagnosing"));
         let diag_sims = ctx.sims(&current, cal, cfg.repeats)?;
-        let (_, diags) = diagnose(model, &diag_sims, cfg.effects.permutations, cfg.seed);
+        let (_, mut diags) = diagnose(model, &diag_sims, cfg.effects.permutations, cfg.seed);
+        // On tracked runs, the bounces: does the model's restitution miss the tracks' with speed or incidence?
+        let observed_bounces: usize = cal.iter().map(|&i| model.runs()[i].impacts.len()).sum();
+        if observed_bounces >= impacts::MIN_BOUNCES_DIAGNOSED {
+            let noise = model.track_noise_m();
+            let simulated =
+                impacts::simulated_impacts(model, &current, cal, cfg.repeats, cfg.seed, noise, cfg.threads)?;
+            let bounce = impacts::bounce_diagnostics(model.runs(), &simulated, cfg.effects.permutations, cfg.seed);
+            for d in &bounce {
+                (ctx.log)(&format!(
+                    "effects loop, round {round}: observed bounces ranked among simulated ones against {}: rho {:.2}, \
+                     p = {:.3} ({} bounces)",
+                    d.covariate, d.spearman_rho, d.p_value, d.n
+                ));
+            }
+            diags.extend(bounce);
+            diags.sort_by(by_strength);
+        }
         out.diagnostics.push(diags.clone());
         let zone_allowed = allowed.iter().any(|d| d.kind == EffectKind::Zone);
         let zc = zone_allowed.then(|| zone_check(model, &diag_sims, &frame, 199, cfg.seed.wrapping_add(round as u64)));
@@ -558,11 +576,13 @@ fn propose(
 ) -> Vec<Proposal> {
     let cfg = ctx.cfg;
     let alpha = cfg.effects.propose_alpha;
-    // Run-out residuals, and on a tracked campaign scored with its rebounds the rebound residuals: both carry an
-    // effect's signature.
+    // Run-out residuals, on a tracked campaign scored with its rebounds the rebound residuals, and the bounces read
+    // from tracks: all carry an effect's signature.
     let rebounds = cfg.rebound_weight.is_some_and(|w| w > 0.0);
-    let runout: Vec<&Diagnostic> =
-        diags.iter().filter(|d| d.residual == "runout" || (rebounds && d.residual == "rebound")).collect();
+    let runout: Vec<&Diagnostic> = diags
+        .iter()
+        .filter(|d| d.residual == "runout" || (rebounds && d.residual == "rebound") || d.residual == BOUNCE_RESIDUAL)
+        .collect();
     let mut props = Vec::new();
     for def in allowed {
         match def.kind {
@@ -623,7 +643,14 @@ fn propose(
             rb.total_cmp(&ra)
         })
     });
-    props.truncate(cfg.effects.max_proposals);
+    // The strongest `max_proposals`, and any effect the bounces point at: they measure restitution directly,
+    // where the run-out residuals see it through the whole path (ours).
+    let direct = |p: &Proposal| p.evidence.iter().any(|d| d.residual == BOUNCE_RESIDUAL);
+    let mut k = 0;
+    props.retain(|p| {
+        k += 1;
+        k <= cfg.effects.max_proposals || direct(p)
+    });
     let _ = round;
     props
 }

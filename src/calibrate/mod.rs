@@ -212,29 +212,37 @@ pub fn calibrate(
             runs::NOT_STARTED_M
         ));
     }
-    let (_, diag_final) = diagnose::diagnose(model, &final_cal, cfg.effects.permutations, cfg.seed);
-    let diag_base = lp
-        .diagnostics
-        .first()
-        .cloned()
-        .unwrap_or_else(|| diagnose::diagnose(model, &base_cal, cfg.effects.permutations, cfg.seed).1);
+    let mut diag_final = diagnose::diagnose(model, &final_cal, cfg.effects.permutations, cfg.seed).1;
+    let mut diag_base = lp.diagnostics.first().cloned();
     let mut bounces = Vec::new();
     let observed_hold = impacts::observed_summary(model, hold);
     for (set, which, observed) in [("calibration", cal, impact_summary), ("holdout", hold, observed_hold)] {
         if let Some(observed) = observed {
             let read = |c: &Candidate| {
-                impacts::simulated_summary(model, c, which, cfg.repeats, cfg.seed, model.track_noise_m(), cfg.threads)
+                impacts::simulated_impacts(model, c, which, cfg.repeats, cfg.seed, model.track_noise_m(), cfg.threads)
             };
             let baseline_b = read(&baseline)?;
             let final_b = if final_c == baseline { baseline_b.clone() } else { read(&final_c)? };
+            if set == "calibration" {
+                diag_final.extend(impacts::bounce_diagnostics(runs, &final_b, cfg.effects.permutations, cfg.seed));
+                diag_final.sort_by(diagnose::by_strength);
+                if diag_base.is_none() {
+                    let mut d = diagnose::diagnose(model, &base_cal, cfg.effects.permutations, cfg.seed).1;
+                    d.extend(impacts::bounce_diagnostics(runs, &baseline_b, cfg.effects.permutations, cfg.seed));
+                    d.sort_by(diagnose::by_strength);
+                    diag_base = Some(d);
+                }
+            }
             bounces.push(impacts::BounceComparison {
                 set: set.into(),
                 observed,
-                baseline: baseline_b,
-                final_model: final_b,
+                baseline: impacts::simulated_summary(&baseline_b, cfg.repeats),
+                final_model: impacts::simulated_summary(&final_b, cfg.repeats),
             });
         }
     }
+    let diag_base =
+        diag_base.unwrap_or_else(|| diagnose::diagnose(model, &base_cal, cfg.effects.permutations, cfg.seed).1);
     let frame = model.map_frame();
     let zc = zone::zone_check(model, &base_cal, &frame, 199, cfg.seed.wrapping_add(1));
     let ids = |v: &[usize]| v.iter().map(|&i| runs[i].id.clone()).collect::<Vec<_>>();

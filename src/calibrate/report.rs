@@ -5,6 +5,7 @@ use super::backanalysis::BackAnalysisRow;
 use super::config::CalibrationConfig;
 use super::diagnose::{covariates, residuals, Diagnostic};
 use super::effects_loop::{AddedEffect, EffectTrial};
+use super::impacts::{BOUNCE_NEIGHBOURS, BOUNCE_RESIDUAL};
 use super::maps::residual_map;
 use super::metrics::{Metrics, MetricsSet};
 use super::model::{Model, RunSims};
@@ -607,6 +608,20 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
                 }
             }
             let _ = writeln!(s);
+            let ranked: Vec<String> = [("baseline", &r.diagnostics), ("final", &r.diagnostics_final)]
+                .iter()
+                .flat_map(|(model, ds)| {
+                    ds.iter().filter(|d| d.residual == BOUNCE_RESIDUAL).map(move |d| {
+                        format!(
+                            "{model}, {}: rho {:.2} (p {:.3}, {} bounces)",
+                            d.covariate, d.spearman_rho, d.p_value, d.n
+                        )
+                    })
+                })
+                .collect();
+            if !ranked.is_empty() {
+                let _ = writeln!(s, "Each observed bounce of a calibration run ranked among the model's {} simulated bounces of the same run nearest in normal impact speed (or incidence), by normal restitution: where the model is right the rank does not change with the speed (or incidence); a rank falling with speed is a restitution falling with speed that the model lacks (`bounce_restitution` in the diagnostics). {}.\n", BOUNCE_NEIGHBOURS, ranked.join("; "));
+            }
         }
         let _ = writeln!(s, "| model, runs | rebound_mae_m | rebound_crps_m |");
         let _ = writeln!(s, "|---|---|---|");
