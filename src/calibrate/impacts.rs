@@ -438,10 +438,10 @@ pub const MIN_BOUNCES_DIAGNOSED: usize = 20;
 /// Does the model's normal restitution miss the tracks' in a way that changes with impact speed or incidence (ours)?
 /// Each observed bounce is ranked among the [`BOUNCE_NEIGHBOURS`] simulated bounces of its own run (`simulated`,
 /// from [`simulated_impacts`]) nearest to it in the covariate, each moved to the observed covariate along their
-/// least-squares line of restitution on it: u = the share of them that came back slower (ties half). Where the model is right, u is uniform whatever the covariate, because both sides are read the same way
-/// and compared at the same speed or incidence: the reading's selection (only bounces that leave fast enough are
-/// read) and a rigid body's apparent restitution falling with speed at constant Cr are in the simulated bounces
-/// too. A restitution that falls with speed where the model's does not makes u fall with the speed. Returns, per
+/// least-squares line of restitution on it: u = the share of them that came back slower (ties half). Where the
+/// model is right, u is uniform whatever the covariate, because both sides are read the same way and compared at
+/// the same speed or incidence: the reading's selection (only bounces that leave fast enough are read) and a rigid
+/// body's apparent restitution falling with speed at constant Cr are in the simulated bounces too. A restitution that falls with speed where the model's does not makes u fall with the speed. Returns, per
 /// covariate, Spearman's rho of u against it with a permutation p-value over the bounces (residual
 /// [`BOUNCE_RESIDUAL`]); nothing under [`MIN_BOUNCES_DIAGNOSED`] bounces. Bounces of one path are treated as
 /// independent given the model.
@@ -652,11 +652,7 @@ mod tests {
             let v = crate::random::uniform_in(rng, 2.0, 12.0);
             let deg = crate::random::uniform_in(rng, 20.0, 70.0);
             let shared = 0.6 - 0.04 * (v - 7.0) + 0.05 * standard_normal(rng);
-            let en = if hidden {
-                shared * 2.0 / (1.0 + (v / 6.0) * (v / 6.0)) * (1.0 + (7.0f64 / 6.0).powi(2)) / 2.0
-            } else {
-                shared
-            };
+            let en = if hidden { shared * (1.0 + (7.0f64 / 6.0).powi(2)) / (1.0 + (v / 6.0).powi(2)) } else { shared };
             bounce(v, deg, en)
         };
         for hidden in [false, true] {
