@@ -120,6 +120,7 @@ pub struct LoopResult {
     pub diagnostics: Vec<Vec<Diagnostic>>,
 }
 
+#[derive(Clone)]
 struct Proposal {
     def: &'static EffectDef,
     label: String,
@@ -636,6 +637,13 @@ fn propose(
             }
         }
     }
+    let _ = round;
+    strongest(props, cfg.effects.max_proposals)
+}
+
+/// `props` strongest first (smallest p, then largest |rho|): the first `max`, and any effect the bounces point at:
+/// they measure restitution directly, where the run-out residuals see it through the whole path (ours).
+fn strongest(mut props: Vec<Proposal>, max: usize) -> Vec<Proposal> {
     props.sort_by(|a, b| {
         a.strength.total_cmp(&b.strength).then_with(|| {
             let ra = a.evidence.iter().map(|d| d.spearman_rho.abs()).fold(0.0, f64::max);
@@ -643,15 +651,12 @@ fn propose(
             rb.total_cmp(&ra)
         })
     });
-    // The strongest `max_proposals`, and any effect the bounces point at: they measure restitution directly,
-    // where the run-out residuals see it through the whole path (ours).
     let direct = |p: &Proposal| p.evidence.iter().any(|d| d.residual == BOUNCE_RESIDUAL);
     let mut k = 0;
     props.retain(|p| {
         k += 1;
-        k <= cfg.effects.max_proposals || direct(p)
+        k <= max || direct(p)
     });
-    let _ = round;
     props
 }
 
@@ -970,6 +975,25 @@ mod tests {
         // Equal complexity: the better one.
         assert_eq!(choose(&[(worse.as_slice(), 1), (speed.as_slice(), 1)], true).unwrap().kept, 1);
         assert!(choose(&[], true).is_none());
+    }
+
+    #[test]
+    fn the_strongest_proposals_are_tried_and_any_the_bounces_point_at() {
+        let prop = |kind: EffectKind, residual: &str, p_value: f64| {
+            let def = definition(ModelKind::Rigid3d, kind).unwrap();
+            let ev = Diagnostic { covariate: "x".into(), residual: residual.into(), spearman_rho: 0.3, p_value, n: 40 };
+            Proposal { def, label: def.name.into(), material: None, evidence: vec![ev], strength: p_value }
+        };
+        let props = vec![
+            prop(EffectKind::SpeedRestitution, BOUNCE_RESIDUAL, 0.016),
+            prop(EffectKind::MassRestitution, "runout", 0.02),
+            prop(EffectKind::Roughness, "runout", 0.001),
+            prop(EffectKind::AngleRestitution, "runout", 0.003),
+        ];
+        let names = |ps: Vec<Proposal>| ps.iter().map(|p| p.def.name).collect::<Vec<_>>();
+        assert_eq!(names(strongest(props.clone(), 2)), ["roughness", "angle_restitution", "speed_restitution"]);
+        assert_eq!(names(strongest(props.clone(), 3)), ["roughness", "angle_restitution", "speed_restitution"]);
+        assert_eq!(names(strongest(props, 4)).len(), 4);
     }
 
     #[test]
