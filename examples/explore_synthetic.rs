@@ -10,7 +10,9 @@
 //! each on 2 cores, 3d_designs 15 minutes, mixed_designs 7 minutes, tracks 4 minutes a design)
 use talus::calibrate::config::Objective;
 use talus::calibrate::effects::{EffectKind, MOBILITY_GRID};
-use talus::calibrate::impacts::{bounce_diagnostics, observed_summary, simulated_impacts, simulated_summary};
+use talus::calibrate::impacts::{
+    bounce_diagnostics, bounce_ranks, observed_summary, simulated_impacts, simulated_summary,
+};
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::model3d::Model3d;
@@ -255,7 +257,7 @@ fn report_impacts(names: &[String]) {
         let all: Vec<usize> = (0..model.runs().len()).collect();
         let observed = observed_summary(model.as_ref(), &all);
         let impacts = simulated_impacts(model.as_ref(), &truth, &all, 20, 1, model.track_noise_m(), 0).unwrap();
-        for d in bounce_diagnostics(model.runs(), &impacts, 999, 1) {
+        for d in bounce_diagnostics(&bounce_ranks(model.runs(), &impacts), 999, 1) {
             println!(
                 "{name:<22} tracks ranked among the truth's bounces against {}: rho {:.3}, p {:.3}",
                 d.covariate, d.spearman_rho, d.p_value

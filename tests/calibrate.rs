@@ -772,6 +772,11 @@ fn command_line_reads_tracked_paths_and_reports_rebound_heights() {
     );
     assert!(cal_rows > 20 && bounces["baseline"]["paths"].as_u64().unwrap() > 0, "{bounces}");
     assert!(md.contains("| observed, calibration (") && md.contains("| baseline, held-out ("), "{md}");
+    // The bounces' ranks, charted and in the diagnostics.
+    assert!(md.contains("](bounce_ranks_vs_bounce_normal_speed_mps.svg)"), "{md}");
+    let chart = std::fs::read_to_string(out.join("bounce_ranks_vs_bounce_normal_speed_mps.svg")).unwrap();
+    assert!(chart.matches("<circle").count() > 20, "{chart}");
+    assert!(json["diagnostics"].as_array().unwrap().iter().any(|d| d["residual"] == "bounce_restitution"));
     // The shipped settings that fix the true model read.
     CalibrationConfig::read(&shipped.join("truth.toml")).unwrap();
     // `rebound_weight = 0`: the loop decides as it would without the tracks file.
@@ -991,7 +996,7 @@ fn simulated_paths_read_as_the_tracks_were_bounce_as_the_tracks_do_under_the_tru
     // Rn) bounces far less than the tracks, and the final model, with speed-dependent restitution found, close to
     // them.
     use talus::calibrate::impacts::{
-        bounce_diagnostics, observed_summary, simulated_impacts, simulated_summary, BOUNCE_NORMAL_SPEED,
+        bounce_diagnostics, bounce_ranks, observed_summary, simulated_impacts, simulated_summary, BOUNCE_NORMAL_SPEED,
         BOUNCE_RESIDUAL,
     };
     let spec = case_2d("speed_tracked", 1).unwrap();
@@ -1026,7 +1031,7 @@ fn simulated_paths_read_as_the_tracks_were_bounce_as_the_tracks_do_under_the_tru
     let sim3 = simulated_summary(&impacts3, 6).unwrap();
     // Ranked among the true model's bounces of their own run at the same normal speed (or incidence), the tracks'
     // restitutions show no trend (measured: rho 0.054, p 0.30; incidence 0.017, p 0.76).
-    let null = bounce_diagnostics(model3.runs(), &impacts3, 999, 1);
+    let null = bounce_diagnostics(&bounce_ranks(model3.runs(), &impacts3), 999, 1);
     assert!(null.len() == 2 && null.iter().all(|d| d.n >= 100 && d.p_value > 0.05), "{null:?}");
     assert!(obs3.n >= 100 && (sim3.per_path / obs3.per_path - 1.0).abs() < 0.15, "{obs3:?}\n{sim3:?}");
     assert!(close(sim3.normal_restitution_median, obs3.normal_restitution_median), "{obs3:?}\n{sim3:?}");

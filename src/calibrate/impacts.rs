@@ -339,6 +339,12 @@ pub struct BounceComparison {
     /// From the final model's.
     #[serde(rename = "final")]
     pub final_model: Option<ImpactSummary>,
+    /// The observed bounces ranked among the baseline's ([`bounce_ranks`]; for the charts, not in report.json).
+    #[serde(skip)]
+    pub baseline_ranks: Vec<BounceRanks>,
+    /// The same among the final model's.
+    #[serde(skip)]
+    pub final_ranks: Vec<BounceRanks>,
 }
 
 /// Fewest bounces for medians.
@@ -435,64 +441,79 @@ pub const BOUNCE_NEIGHBOURS: usize = 15;
 /// Fewest observed bounces for a bounce diagnostic (ours).
 pub const MIN_BOUNCES_DIAGNOSED: usize = 20;
 
+/// The observed bounces' ranks among a model's against one covariate ([`bounce_ranks`]).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct BounceRanks {
+    /// [`BOUNCE_NORMAL_SPEED`] or [`BOUNCE_INCIDENCE`].
+    pub covariate: &'static str,
+    /// (the observed bounce's covariate, its rank u in [0, 1]), one per observed bounce ranked.
+    pub points: Vec<[f64; 2]>,
+}
+
 /// Does the model's normal restitution miss the tracks' in a way that changes with impact speed or incidence (ours)?
 /// Each observed bounce is ranked among the [`BOUNCE_NEIGHBOURS`] simulated bounces of its own run (`simulated`,
 /// from [`simulated_impacts`]) nearest to it in the covariate, each moved to the observed covariate along their
 /// least-squares line of restitution on it: u = the share of them that came back slower (ties half). Where the
 /// model is right, u is uniform whatever the covariate, because both sides are read the same way and compared at
 /// the same speed or incidence: the reading's selection (only bounces that leave fast enough are read) and a rigid
-/// body's apparent restitution falling with speed at constant Cr are in the simulated bounces too. A restitution that falls with speed where the model's does not makes u fall with the speed. Returns, per
-/// covariate, Spearman's rho of u against it with a permutation p-value over the bounces (residual
-/// [`BOUNCE_RESIDUAL`]); nothing under [`MIN_BOUNCES_DIAGNOSED`] bounces. Bounces of one path are treated as
-/// independent given the model.
-pub fn bounce_diagnostics(
-    runs: &[FieldRun],
-    simulated: &[(usize, Vec<Impact>)],
-    permutations: usize,
-    seed: u64,
-) -> Vec<Diagnostic> {
-    let mut rng = stream(seed, BOUNCE_STREAM);
+/// body's apparent restitution falling with speed at constant Cr are in the simulated bounces too. A restitution
+/// that falls with speed where the model's does not makes u fall with the speed. Runs with fewer than
+/// [`BOUNCE_NEIGHBOURS`] simulated bounces are skipped.
+pub fn bounce_ranks(runs: &[FieldRun], simulated: &[(usize, Vec<Impact>)]) -> Vec<BounceRanks> {
     type Key = fn(&Impact) -> f64;
-    let covariates: [(&str, Key); 2] =
+    let covariates: [(&'static str, Key); 2] =
         [(BOUNCE_NORMAL_SPEED, |i| i.normal_speed_in_mps), (BOUNCE_INCIDENCE, |i| i.incidence_deg)];
-    let mut out = Vec::new();
-    for (name, key) in covariates {
-        let (mut x, mut u) = (Vec::new(), Vec::new());
-        for (run, sim) in simulated.iter().filter(|(_, s)| s.len() >= BOUNCE_NEIGHBOURS) {
-            for o in &runs[*run].impacts {
-                let mut near: Vec<&Impact> = sim.iter().collect();
-                near.sort_by(|a, b| (key(a) - key(o)).abs().total_cmp(&(key(b) - key(o)).abs()));
-                let near = &near[..BOUNCE_NEIGHBOURS];
-                // Each neighbour moved to the observed bounce's covariate along the neighbours' own trend, so that
-                // a bounce at the edge of the simulated range is not ranked among bounces all on one side of it.
-                let c: Vec<f64> = near.iter().map(|s| key(s)).collect();
-                let e: Vec<f64> = near.iter().map(|s| s.normal_restitution).collect();
-                let trend = line(&c, &e, 0..near.len()).slope;
-                let below: f64 = c
-                    .iter()
-                    .zip(&e)
-                    .map(|(c, e)| match (e + trend * (key(o) - c)).total_cmp(&o.normal_restitution) {
-                        std::cmp::Ordering::Less => 1.0,
-                        std::cmp::Ordering::Equal => 0.5,
-                        std::cmp::Ordering::Greater => 0.0,
-                    })
-                    .sum();
-                x.push(key(o));
-                u.push(below / BOUNCE_NEIGHBOURS as f64);
+    covariates
+        .into_iter()
+        .map(|(covariate, key)| {
+            let mut points = Vec::new();
+            for (run, sim) in simulated.iter().filter(|(_, s)| s.len() >= BOUNCE_NEIGHBOURS) {
+                for o in &runs[*run].impacts {
+                    let mut near: Vec<&Impact> = sim.iter().collect();
+                    near.sort_by(|a, b| (key(a) - key(o)).abs().total_cmp(&(key(b) - key(o)).abs()));
+                    let near = &near[..BOUNCE_NEIGHBOURS];
+                    // Each neighbour moved to the observed bounce's covariate along the neighbours' own trend, so
+                    // that a bounce at the edge of the simulated range is not ranked among bounces all on one side.
+                    let c: Vec<f64> = near.iter().map(|s| key(s)).collect();
+                    let e: Vec<f64> = near.iter().map(|s| s.normal_restitution).collect();
+                    let trend = line(&c, &e, 0..near.len()).slope;
+                    let below: f64 = c
+                        .iter()
+                        .zip(&e)
+                        .map(|(c, e)| match (e + trend * (key(o) - c)).total_cmp(&o.normal_restitution) {
+                            std::cmp::Ordering::Less => 1.0,
+                            std::cmp::Ordering::Equal => 0.5,
+                            std::cmp::Ordering::Greater => 0.0,
+                        })
+                        .sum();
+                    points.push([key(o), below / BOUNCE_NEIGHBOURS as f64]);
+                }
             }
-        }
-        if x.len() >= MIN_BOUNCES_DIAGNOSED {
+            BounceRanks { covariate, points }
+        })
+        .collect()
+}
+
+/// Per covariate of `ranks` ([`bounce_ranks`]), Spearman's rho of the rank against the covariate with a
+/// permutation p-value over the bounces (residual [`BOUNCE_RESIDUAL`]); nothing under [`MIN_BOUNCES_DIAGNOSED`]
+/// bounces. Bounces of one path are treated as independent given the model (ours).
+pub fn bounce_diagnostics(ranks: &[BounceRanks], permutations: usize, seed: u64) -> Vec<Diagnostic> {
+    let mut rng = stream(seed, BOUNCE_STREAM);
+    ranks
+        .iter()
+        .filter(|r| r.points.len() >= MIN_BOUNCES_DIAGNOSED)
+        .map(|r| {
+            let (x, u): (Vec<f64>, Vec<f64>) = r.points.iter().map(|p| (p[0], p[1])).unzip();
             let (rho, p) = spearman_permutation(&x, &u, permutations, &mut rng);
-            out.push(Diagnostic {
-                covariate: name.into(),
+            Diagnostic {
+                covariate: r.covariate.into(),
                 residual: BOUNCE_RESIDUAL.into(),
                 spearman_rho: rho,
                 p_value: p,
                 n: x.len(),
-            });
-        }
-    }
-    out
+            }
+        })
+        .collect()
 }
 
 /// `path` (times since release) read at `times_s` (since release): linear between its samples, its last position
@@ -664,7 +685,7 @@ mod tests {
                 runs.push(run);
                 simulated.push((i, (0..60).map(|_| draw(false, &mut rng)).collect::<Vec<_>>()));
             }
-            let d = bounce_diagnostics(&runs, &simulated, 999, 1);
+            let d = bounce_diagnostics(&bounce_ranks(&runs, &simulated), 999, 1);
             assert_eq!(d.len(), 2);
             let speed = d.iter().find(|d| d.covariate == BOUNCE_NORMAL_SPEED).unwrap();
             let incidence = d.iter().find(|d| d.covariate == BOUNCE_INCIDENCE).unwrap();
@@ -679,6 +700,6 @@ mod tests {
         }
         // Too few bounces: nothing.
         let runs = vec![crate::calibrate::metrics::tests::run(0, 0, 50.0)];
-        assert!(bounce_diagnostics(&runs, &[(0, vec![bounce(5.0, 45.0, 0.5); 20])], 99, 1).is_empty());
+        assert!(bounce_diagnostics(&bounce_ranks(&runs, &[(0, vec![bounce(5.0, 45.0, 0.5); 20])]), 99, 1).is_empty());
     }
 }

@@ -158,7 +158,8 @@ pub fn effects_loop(
             let noise = model.track_noise_m();
             let simulated =
                 impacts::simulated_impacts(model, &current, cal, cfg.repeats, cfg.seed, noise, cfg.threads)?;
-            let bounce = impacts::bounce_diagnostics(model.runs(), &simulated, cfg.effects.permutations, cfg.seed);
+            let ranks = impacts::bounce_ranks(model.runs(), &simulated);
+            let bounce = impacts::bounce_diagnostics(&ranks, cfg.effects.permutations, cfg.seed);
             for d in &bounce {
                 (ctx.log)(&format!(
                     "effects loop, round {round}: observed bounces ranked among simulated ones against {}: rho {:.2}, \

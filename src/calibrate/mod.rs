@@ -223,12 +223,15 @@ pub fn calibrate(
             };
             let baseline_b = read(&baseline)?;
             let final_b = if final_c == baseline { baseline_b.clone() } else { read(&final_c)? };
+            let (mut baseline_ranks, mut final_ranks) = (Vec::new(), Vec::new());
             if set == "calibration" {
-                diag_final.extend(impacts::bounce_diagnostics(runs, &final_b, cfg.effects.permutations, cfg.seed));
+                baseline_ranks = impacts::bounce_ranks(runs, &baseline_b);
+                final_ranks = impacts::bounce_ranks(runs, &final_b);
+                diag_final.extend(impacts::bounce_diagnostics(&final_ranks, cfg.effects.permutations, cfg.seed));
                 diag_final.sort_by(diagnose::by_strength);
                 if diag_base.is_none() {
                     let mut d = diagnose::diagnose(model, &base_cal, cfg.effects.permutations, cfg.seed).1;
-                    d.extend(impacts::bounce_diagnostics(runs, &baseline_b, cfg.effects.permutations, cfg.seed));
+                    d.extend(impacts::bounce_diagnostics(&baseline_ranks, cfg.effects.permutations, cfg.seed));
                     d.sort_by(diagnose::by_strength);
                     diag_base = Some(d);
                 }
@@ -238,6 +241,8 @@ pub fn calibrate(
                 observed,
                 baseline: impacts::simulated_summary(&baseline_b, cfg.repeats),
                 final_model: impacts::simulated_summary(&final_b, cfg.repeats),
+                baseline_ranks,
+                final_ranks,
             });
         }
     }

@@ -5,7 +5,7 @@ use super::backanalysis::BackAnalysisRow;
 use super::config::CalibrationConfig;
 use super::diagnose::{covariates, residuals, Diagnostic};
 use super::effects_loop::{AddedEffect, EffectTrial};
-use super::impacts::{BOUNCE_NEIGHBOURS, BOUNCE_RESIDUAL};
+use super::impacts::{BounceRanks, BOUNCE_NEIGHBOURS, BOUNCE_RESIDUAL};
 use super::maps::residual_map;
 use super::metrics::{Metrics, MetricsSet};
 use super::model::{Model, RunSims};
@@ -289,6 +289,38 @@ pub fn write_report(
                     format!("Calibration runs' run-out residuals against {}, baseline and final.", d.covariate),
                 ));
             }
+        }
+    }
+    // The observed bounces' ranks among each model's (tracked campaigns).
+    for b in report.bounces.iter().filter(|b| b.set == "calibration") {
+        for (base, fin) in b.baseline_ranks.iter().zip(&b.final_ranks) {
+            if base.points.is_empty() && fin.points.is_empty() {
+                continue;
+            }
+            let points = |r: &BounceRanks| r.points.iter().map(|p| (p[0], p[1])).collect();
+            let chart = Chart {
+                title: format!("Observed bounces ranked among the model's, against {}", base.covariate),
+                x_label: base.covariate.into(),
+                y_label: "share of the model's bounces that came back slower".into(),
+                y_range: Some((0.0, 1.0)),
+                series: vec![
+                    Series::new("baseline", points(base), SeriesStyle::Markers, CATEGORICAL[1]),
+                    Series::new("final", points(fin), SeriesStyle::Markers, CATEGORICAL[2]),
+                ],
+                hlines: vec![(0.5, String::new())],
+                ..Default::default()
+            };
+            let name = format!("bounce_ranks_vs_{}.svg", base.covariate);
+            write_svg(&dir.join(&name), &chart)?;
+            figures.push((
+                name,
+                format!(
+                    "Each observed bounce of the calibration runs ranked by normal restitution among the model's {} \
+                     simulated bounces of its run nearest in {} (docs/calibration.md, \"Bounces as evidence\"): \
+                     without a trend where the model is right.",
+                    BOUNCE_NEIGHBOURS, base.covariate
+                ),
+            ));
         }
     }
     // Residual maps.
