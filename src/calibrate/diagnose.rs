@@ -178,6 +178,13 @@ pub fn by_strength(a: &Diagnostic, b: &Diagnostic) -> std::cmp::Ordering {
     a.p_value.total_cmp(&b.p_value).then(b.spearman_rho.abs().total_cmp(&a.spearman_rho.abs()))
 }
 
+/// `diagnostics` with `more` among them, in order of strength.
+pub fn merged(mut diagnostics: Vec<Diagnostic>, more: Vec<Diagnostic>) -> Vec<Diagnostic> {
+    diagnostics.extend(more);
+    diagnostics.sort_by(by_strength);
+    diagnostics
+}
+
 /// The covariate name of [`spread_check`].
 pub const OUTSIDE_RANGE: &str = "outside_simulated_range";
 

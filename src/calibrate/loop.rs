@@ -36,7 +36,7 @@
 //! cut), then refitted with the optimiser (together with the base parameters), and the loop starts again.
 
 use super::config::{CalibrationConfig, ModelKind};
-use super::diagnose::{by_strength, diagnose, spread_check, Diagnostic, DEPOSITION_EXCESS};
+use super::diagnose::{diagnose, merged, spread_check, Diagnostic, DEPOSITION_EXCESS};
 use super::effects::{
     definition, effects_for, recentring, EffectDef, EffectKind, Recentring, CR_SCALE_GRID, MOBILITY_GRID,
     ZONE_DRAG_GRID, ZONE_MOBILITY_GRID,
@@ -167,8 +167,7 @@ pub fn effects_loop(
                     d.covariate, d.spearman_rho, d.p_value, d.n
                 ));
             }
-            diags.extend(bounce);
-            diags.sort_by(by_strength);
+            diags = merged(diags, bounce);
         }
         out.diagnostics.push(diags.clone());
         let zone_allowed = allowed.iter().any(|d| d.kind == EffectKind::Zone);

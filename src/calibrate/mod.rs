@@ -212,9 +212,8 @@ pub fn calibrate(
             runs::NOT_STARTED_M
         ));
     }
-    let mut diag_final = diagnose::diagnose(model, &final_cal, cfg.effects.permutations, cfg.seed).1;
-    let mut diag_base = lp.diagnostics.first().cloned();
     let mut bounces = Vec::new();
+    let (mut base_bounce_diags, mut final_bounce_diags) = (Vec::new(), Vec::new());
     let observed_hold = impacts::observed_summary(model, hold);
     for (set, which, observed) in [("calibration", cal, impact_summary), ("holdout", hold, observed_hold)] {
         if let Some(observed) = observed {
@@ -227,14 +226,8 @@ pub fn calibrate(
             if set == "calibration" {
                 baseline_ranks = impacts::bounce_ranks(runs, &baseline_b);
                 final_ranks = impacts::bounce_ranks(runs, &final_b);
-                diag_final.extend(impacts::bounce_diagnostics(&final_ranks, cfg.effects.permutations, cfg.seed));
-                diag_final.sort_by(diagnose::by_strength);
-                if diag_base.is_none() {
-                    let mut d = diagnose::diagnose(model, &base_cal, cfg.effects.permutations, cfg.seed).1;
-                    d.extend(impacts::bounce_diagnostics(&baseline_ranks, cfg.effects.permutations, cfg.seed));
-                    d.sort_by(diagnose::by_strength);
-                    diag_base = Some(d);
-                }
+                base_bounce_diags = impacts::bounce_diagnostics(&baseline_ranks, cfg.effects.permutations, cfg.seed);
+                final_bounce_diags = impacts::bounce_diagnostics(&final_ranks, cfg.effects.permutations, cfg.seed);
             }
             bounces.push(impacts::BounceComparison {
                 set: set.into(),
@@ -246,8 +239,15 @@ pub fn calibrate(
             });
         }
     }
-    let diag_base =
-        diag_base.unwrap_or_else(|| diagnose::diagnose(model, &base_cal, cfg.effects.permutations, cfg.seed).1);
+    // The loop's first round diagnosed the baseline, bounces included; without a round, diagnose it here.
+    let diagnosed = |sims: &[RunSims], bounce| {
+        diagnose::merged(diagnose::diagnose(model, sims, cfg.effects.permutations, cfg.seed).1, bounce)
+    };
+    let diag_final = diagnosed(&final_cal, final_bounce_diags);
+    let diag_base = match lp.diagnostics.first() {
+        Some(d) => d.clone(),
+        None => diagnosed(&base_cal, base_bounce_diags),
+    };
     let frame = model.map_frame();
     let zc = zone::zone_check(model, &base_cal, &frame, 199, cfg.seed.wrapping_add(1));
     let ids = |v: &[usize]| v.iter().map(|&i| runs[i].id.clone()).collect::<Vec<_>>();

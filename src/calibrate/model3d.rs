@@ -199,10 +199,6 @@ impl Model3d {
         &self.terrain
     }
 
-    fn local(&self, p: [f64; 3]) -> Vector3<f64> {
-        to_local(&self.terrain, p)
-    }
-
     fn material(params: &Params, prefix: &str, name: &str, m: f64) -> Result<Material> {
         let g = |n: &str| {
             params.get(&format!("{prefix}.{n}")).ok_or_else(|| {
@@ -257,7 +253,7 @@ impl Model for Model3d {
     }
 
     fn release_height_m(&self, run: &FieldRun) -> f64 {
-        let p = self.local(run.release_m);
+        let p = to_local(&self.terrain, run.release_m);
         self.terrain.surface.height(p.x, p.y).map(|z| p.z - z).unwrap_or(0.0)
     }
 
@@ -520,7 +516,7 @@ impl Prepared3d<'_> {
         let terrain = &self.terrain;
         let body = &model.bodies[&run.block_id];
         let mut rng = stream(seed, super::model::stream_index(run.index, repeat));
-        let p = model.local(run.release_m);
+        let p = to_local(&model.terrain, run.release_m);
         let v = terrain.up.to_internal(run.velocity_mps);
         let w = terrain.up.to_internal(run.spin_radps);
         let start = measured_release(terrain, body, p, v, w, &mut rng);
@@ -660,7 +656,7 @@ mod tests {
         let first = &untracked.runs()[0];
         let [x0, y0, _] = first.release_m;
         let ground = |x: f64, y: f64| {
-            let p = untracked.local([x, y, 0.0]);
+            let p = to_local(&untracked.terrain, [x, y, 0.0]);
             untracked.terrain.surface.height(p.x, p.y).unwrap() - p.z
         };
         let mut track = String::from("trajectory_id,time_s,x_m,y_m,z_m\n");
