@@ -1052,3 +1052,40 @@ fn simulated_paths_read_as_the_tracks_were_bounce_as_the_tracks_do_under_the_tru
         assert!(ds.iter().any(|d| d.residual == BOUNCE_RESIDUAL && d.covariate == BOUNCE_NORMAL_SPEED), "{ds:?}");
     }
 }
+
+#[test]
+fn the_final_evaluation_reports_the_models_the_loop_diagnosed_as_if_simulated_afresh() {
+    // The final evaluation reuses the loop's simulations (run-outs and bounces) of the models it diagnosed: the
+    // baseline in round 1, and a final model the last round added nothing to. On the shipped tracked profile
+    // campaign the loop keeps speed-dependent restitution in round 1 and nothing in round 2. Stopped before round 1
+    // (max_rounds 0) or after it (1), nothing is reused for the baseline or the final model respectively: every
+    // figure must be the same.
+    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign_tracked");
+    let campaign = talus::campaign::Campaign::read(&shipped).unwrap();
+    let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, 20.0).unwrap();
+    let cfg = CalibrationConfig::default();
+    let model =
+        talus::calibrate::model2d::Model2d::new(&campaign, runs, groups, &shipped.join("profile.csv"), &cfg).unwrap();
+    let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+    let run = |rounds: usize| {
+        let mut c = cfg.clone();
+        c.effects.max_rounds = rounds;
+        calibrate(&model, &c, &cal, &hold, "seeded", None, &quiet).unwrap().report
+    };
+    let (full, none, one) = (run(cfg.effects.max_rounds), run(0), run(1));
+    assert_eq!(full.effects_added.len(), 1, "{:?}", full.effects_added);
+    let bounces = |r: &talus::calibrate::report::Report, fin: bool| {
+        let b = r.bounces.iter().find(|b| b.set == "calibration").unwrap();
+        if fin {
+            b.final_model.clone()
+        } else {
+            b.baseline.clone()
+        }
+    };
+    assert_eq!(full.baseline.calibration, none.baseline.calibration);
+    assert_eq!(full.diagnostics, none.diagnostics);
+    assert_eq!(bounces(&full, false), bounces(&none, false));
+    assert_eq!(full.final_stage.calibration, one.final_stage.calibration);
+    assert_eq!(full.diagnostics_final, one.diagnostics_final);
+    assert_eq!(bounces(&full, true), bounces(&one, true));
+}

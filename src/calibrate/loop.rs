@@ -116,8 +116,22 @@ pub struct LoopResult {
     pub added: Vec<AddedEffect>,
     /// Every trial.
     pub trials: Vec<EffectTrial>,
-    /// Diagnostics of each round's starting model (round 1: the baseline).
-    pub diagnostics: Vec<Vec<Diagnostic>>,
+    /// Each round's starting model as diagnosed (round 1: the baseline).
+    pub rounds: Vec<Diagnosed>,
+}
+
+/// A round's starting model as the loop diagnosed it: its simulations of the calibration runs at the reported
+/// repeats and seed, which the final evaluation reuses rather than simulating the same model again.
+#[derive(Debug, Clone)]
+pub struct Diagnosed {
+    /// The model.
+    pub candidate: Candidate,
+    /// Its simulations of the calibration runs (`repeats` each, the run's own seed).
+    pub sims: Vec<RunSims>,
+    /// Its bounces read on the tracked calibration runs, when these hold enough observed bounces to diagnose.
+    pub bounces: Option<Vec<(usize, Vec<impacts::Impact>)>>,
+    /// The run-out (and bounce) diagnostics.
+    pub diagnostics: Vec<Diagnostic>,
 }
 
 #[derive(Clone)]
@@ -140,8 +154,7 @@ pub fn effects_loop(
     let model = ctx.model;
     let kind = model.kind();
     let mut current = baseline.clone();
-    let mut out =
-        LoopResult { candidate: current.clone(), added: Vec::new(), trials: Vec::new(), diagnostics: Vec::new() };
+    let mut out = LoopResult { candidate: current.clone(), added: Vec::new(), trials: Vec::new(), rounds: Vec::new() };
     let allowed: Vec<&'static EffectDef> = effects_for(kind)
         .iter()
         .filter(|d| cfg.effects.candidates.is_empty() || cfg.effects.candidates.iter().any(|c| c == d.name))
@@ -154,11 +167,13 @@ pub fn effects_loop(
         let (_, mut diags) = diagnose(model, &diag_sims, cfg.effects.permutations, cfg.seed);
         // On tracked runs, the bounces: does the model's restitution miss the tracks' with speed or incidence?
         let observed_bounces: usize = cal.iter().map(|&i| model.runs()[i].impacts.len()).sum();
+        let mut bounce_sims = None;
         if observed_bounces >= impacts::MIN_BOUNCES_DIAGNOSED {
             let noise = model.track_noise_m();
             let simulated =
                 impacts::simulated_impacts(model, &current, cal, cfg.repeats, cfg.seed, noise, cfg.threads)?;
             let ranks = impacts::bounce_ranks(model.runs(), &simulated);
+            bounce_sims = Some(simulated);
             let bounce = impacts::bounce_diagnostics(&ranks, cfg.effects.permutations, cfg.seed);
             for d in &bounce {
                 (ctx.log)(&format!(
@@ -169,7 +184,12 @@ pub fn effects_loop(
             }
             diags = merged(diags, bounce);
         }
-        out.diagnostics.push(diags.clone());
+        out.rounds.push(Diagnosed {
+            candidate: current.clone(),
+            sims: diag_sims.clone(),
+            bounces: bounce_sims,
+            diagnostics: diags.clone(),
+        });
         let zone_allowed = allowed.iter().any(|d| d.kind == EffectKind::Zone);
         let zc = zone_allowed.then(|| zone_check(model, &diag_sims, &frame, 199, cfg.seed.wrapping_add(round as u64)));
         if let Some(z) = &zc {

@@ -191,15 +191,18 @@ pub fn calibrate(
     let t_loop = t0.elapsed().as_secs_f64();
     log("final evaluation");
     let final_c = lp.candidate.clone();
-    let base_cal = ctx.sims(&baseline, cal, cfg.repeats)?;
+    // A model the loop diagnosed was simulated on the calibration runs as here: reuse those simulations.
+    let diagnosed = |c: &Candidate| lp.rounds.iter().find(|r| r.candidate == *c);
+    let cal_sims = |c: &Candidate| match diagnosed(c) {
+        Some(r) => Ok(r.sims.clone()),
+        None => ctx.sims(c, cal, cfg.repeats),
+    };
+    let base_cal = cal_sims(&baseline)?;
     let base_hold = if hold.is_empty() { Vec::new() } else { ctx.sims(&baseline, hold, cfg.repeats)? };
     let (final_cal, final_hold) = if final_c == baseline {
         (base_cal.clone(), base_hold.clone())
     } else {
-        (
-            ctx.sims(&final_c, cal, cfg.repeats)?,
-            if hold.is_empty() { Vec::new() } else { ctx.sims(&final_c, hold, cfg.repeats)? },
-        )
+        (cal_sims(&final_c)?, if hold.is_empty() { Vec::new() } else { ctx.sims(&final_c, hold, cfg.repeats)? })
     };
     let mut stalling = runs::runs_stalling(runs, &base_cal, "calibration");
     stalling.extend(runs::runs_stalling(runs, &base_hold, "holdout"));
@@ -217,8 +220,10 @@ pub fn calibrate(
     let observed_hold = impacts::observed_summary(model, hold);
     for (set, which, observed) in [("calibration", cal, impact_summary), ("holdout", hold, observed_hold)] {
         if let Some(observed) = observed {
-            let read = |c: &Candidate| {
-                impacts::simulated_impacts(model, c, which, cfg.repeats, cfg.seed, model.track_noise_m(), cfg.threads)
+            let noise = model.track_noise_m();
+            let read = |c: &Candidate| match diagnosed(c).and_then(|r| r.bounces.clone()) {
+                Some(b) if set == "calibration" => Ok(b),
+                _ => impacts::simulated_impacts(model, c, which, cfg.repeats, cfg.seed, noise, cfg.threads),
             };
             let baseline_b = read(&baseline)?;
             let final_b = if final_c == baseline { baseline_b.clone() } else { read(&final_c)? };
@@ -239,15 +244,13 @@ pub fn calibrate(
             });
         }
     }
-    // The loop's first round diagnosed the baseline, bounces included; without a round, diagnose it here.
-    let diagnosed = |sims: &[RunSims], bounce| {
-        diagnose::merged(diagnose::diagnose(model, sims, cfg.effects.permutations, cfg.seed).1, bounce)
+    // The loop diagnosed the baseline (round 1) and a final model its last round kept nothing to; else here.
+    let diagnostics = |c: &Candidate, sims: &[RunSims], bounce| match diagnosed(c) {
+        Some(r) => r.diagnostics.clone(),
+        None => diagnose::merged(diagnose::diagnose(model, sims, cfg.effects.permutations, cfg.seed).1, bounce),
     };
-    let diag_final = diagnosed(&final_cal, final_bounce_diags);
-    let diag_base = match lp.diagnostics.first() {
-        Some(d) => d.clone(),
-        None => diagnosed(&base_cal, base_bounce_diags),
-    };
+    let diag_base = diagnostics(&baseline, &base_cal, base_bounce_diags);
+    let diag_final = diagnostics(&final_c, &final_cal, final_bounce_diags);
     let frame = model.map_frame();
     let zc = zone::zone_check(model, &base_cal, &frame, 199, cfg.seed.wrapping_add(1));
     let ids = |v: &[usize]| v.iter().map(|&i| runs[i].id.clone()).collect::<Vec<_>>();

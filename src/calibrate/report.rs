@@ -257,30 +257,16 @@ pub fn write_report(
             }
             let Some(x) = cov.get(&d.covariate) else { continue };
             seen.push(d.covariate.clone());
-            let chart = Chart {
-                title: format!(
-                    "Run-out residual vs {} (rho = {:.2}, p = {:.3})",
-                    d.covariate, d.spearman_rho, d.p_value
-                ),
-                x_label: d.covariate.clone(),
-                y_label: "observed - median simulated run-out (m)".into(),
-                series: vec![
-                    Series::new(
-                        "baseline",
-                        x.iter().copied().zip(r0.iter().copied()).collect(),
-                        SeriesStyle::Markers,
-                        CATEGORICAL[1],
-                    ),
-                    Series::new(
-                        "final",
-                        x.iter().copied().zip(r1.iter().copied()).collect(),
-                        SeriesStyle::Markers,
-                        CATEGORICAL[2],
-                    ),
+            let chart = baseline_and_final(
+                format!("Run-out residual vs {} (rho = {:.2}, p = {:.3})", d.covariate, d.spearman_rho, d.p_value),
+                &d.covariate,
+                "observed - median simulated run-out (m)",
+                [
+                    x.iter().copied().zip(r0.iter().copied()).collect(),
+                    x.iter().copied().zip(r1.iter().copied()).collect(),
                 ],
-                hlines: vec![(0.0, String::new())],
-                ..Default::default()
-            };
+                0.0,
+            );
             let name = residual_chart(&d.covariate);
             write_svg(&dir.join(&name), &chart)?;
             if seen.len() <= 4 {
@@ -299,16 +285,14 @@ pub fn write_report(
             }
             let points = |r: &BounceRanks| r.points.iter().map(|p| (p[0], p[1])).collect();
             let chart = Chart {
-                title: format!("Observed bounces ranked among the model's, against {}", base.covariate),
-                x_label: base.covariate.into(),
-                y_label: "share of the model's bounces that came back slower".into(),
                 y_range: Some((0.0, 1.0)),
-                series: vec![
-                    Series::new("baseline", points(base), SeriesStyle::Markers, CATEGORICAL[1]),
-                    Series::new("final", points(fin), SeriesStyle::Markers, CATEGORICAL[2]),
-                ],
-                hlines: vec![(0.5, String::new())],
-                ..Default::default()
+                ..baseline_and_final(
+                    format!("Observed bounces ranked among the model's, against {}", base.covariate),
+                    base.covariate,
+                    "share of the model's bounces that came back slower",
+                    [points(base), points(fin)],
+                    0.5,
+                )
             };
             let name = format!("bounce_ranks_vs_{}.svg", base.covariate);
             write_svg(&dir.join(&name), &chart)?;
@@ -402,6 +386,22 @@ pub fn write_report(
 }
 
 /// The file of the chart of run-out residual against `covariate`.
+/// A chart of the baseline's and the final model's points (markers), with a horizontal line where the model is right.
+fn baseline_and_final(title: String, x_label: &str, y_label: &str, points: [Vec<(f64, f64)>; 2], right: f64) -> Chart {
+    let [base, fin] = points;
+    Chart {
+        title,
+        x_label: x_label.into(),
+        y_label: y_label.into(),
+        series: vec![
+            Series::new("baseline", base, SeriesStyle::Markers, CATEGORICAL[1]),
+            Series::new("final", fin, SeriesStyle::Markers, CATEGORICAL[2]),
+        ],
+        hlines: vec![(right, String::new())],
+        ..Default::default()
+    }
+}
+
 fn residual_chart(covariate: &str) -> String {
     format!("residual_vs_{covariate}.svg")
 }
