@@ -777,17 +777,26 @@ fn command_line_reads_tracked_paths_and_reports_rebound_heights() {
     let chart = std::fs::read_to_string(out.join("bounce_ranks_vs_bounce_normal_speed_mps.svg")).unwrap();
     assert!(chart.matches("<circle").count() > 20, "{chart}");
     assert!(json["diagnostics"].as_array().unwrap().iter().any(|d| d["residual"] == "bounce_restitution"));
+    // Rt measured by the bounces (truth 0.8), reported, not fixed by default.
+    let rt = &json["measured_from_tracks"][0];
+    assert!(rt["fixed"] == false && rt["value"].as_f64().is_some_and(|v| (0.75..0.85).contains(&v)), "{rt}");
+    assert!(
+        md.contains("`ground.rt_mean` measured by the calibration runs' tracks") && md.contains("not fixed"),
+        "{md}"
+    );
     // The shipped settings that fix the true model read.
     CalibrationConfig::read(&shipped.join("truth.toml")).unwrap();
-    // `rebound_weight = 0`: the loop decides as it would without the tracks file.
+    // `rebound_weight = 0`, with `fix_rt_from_tracks` and Rt given by the settings (which the measured Rt never
+    // overrides): the loop decides as it would without the tracks file.
     let untracked = dir.path().join("untracked");
     std::fs::create_dir(&untracked).unwrap();
     for f in ["release_points.csv", "observed_deposition.csv", "block_metadata.csv", "profile.csv"] {
         std::fs::copy(shipped.join(f), untracked.join(f)).unwrap();
     }
     let small = "max_evaluations = 20\nrepeats = 8\n[back_analysis]\nenabled = false\n\
+                 [materials.ground]\nrt_mean = [0.3, 0.99]\n\
                  [effects]\nmax_rounds = 1\nrefit_evaluations = 10\ncv_refit_evaluations = 10\n";
-    std::fs::write(&settings, format!("rebound_weight = 0\n{small}")).unwrap();
+    std::fs::write(&settings, format!("rebound_weight = 0\nfix_rt_from_tracks = true\n{small}")).unwrap();
     let final_parameters = |campaign: &std::path::Path, out: &std::path::Path| {
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
             .arg("calibrate")
@@ -1000,17 +1009,7 @@ fn simulated_paths_read_as_the_tracks_were_bounce_as_the_tracks_do_under_the_tru
         BOUNCE_RESIDUAL,
     };
     let spec = case_2d("speed_tracked", 1).unwrap();
-    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign_tracked");
-    let campaign = talus::campaign::Campaign::read(&shipped).unwrap();
-    let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, 20.0).unwrap();
-    let model = talus::calibrate::model2d::Model2d::new(
-        &campaign,
-        runs,
-        groups,
-        &shipped.join("profile.csv"),
-        &CalibrationConfig::default(),
-    )
-    .unwrap();
+    let model = shipped_tracked_profile(&CalibrationConfig::default());
     let all: Vec<usize> = (0..model.runs().len()).collect();
     let obs = observed_summary(&model, &all).unwrap();
     let sim =
@@ -1053,6 +1052,41 @@ fn simulated_paths_read_as_the_tracks_were_bounce_as_the_tracks_do_under_the_tru
     }
 }
 
+/// `examples/profile_campaign_tracked` as a model.
+fn shipped_tracked_profile(cfg: &CalibrationConfig) -> talus::calibrate::model2d::Model2d {
+    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign_tracked");
+    let campaign = talus::campaign::Campaign::read(&shipped).unwrap();
+    let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, 20.0).unwrap();
+    talus::calibrate::model2d::Model2d::new(&campaign, runs, groups, &shipped.join("profile.csv"), cfg).unwrap()
+}
+
+#[test]
+fn rt_fixed_from_the_tracks_settles_the_trade_of_rt_against_friction() {
+    // The shipped tracked profile campaign (truth Rn 0.6 falling with speed, K = 10 m/s; Rt 0.8; 40°): fitted on
+    // run-outs and rebound heights, the final model keeps a low Rt with a low friction angle (measured: 0.54, 27°);
+    // with Rt fixed at the tracks' median tangential restitution (0.78) the loop ends near the truth (40.4°, Rn 0.62,
+    // K 9.5 m/s).
+    let fitted = |fix: bool| {
+        let cfg = CalibrationConfig { fix_rt_from_tracks: fix, ..CalibrationConfig::default() };
+        let model = shipped_tracked_profile(&cfg);
+        let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+        calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report
+    };
+    let (free, fixed) = (fitted(false), fitted(true));
+    let p = |r: &talus::calibrate::report::Report, k: &str| r.final_stage.parameters.get(k).unwrap();
+    assert!(
+        p(&free, "ground.friction_angle_deg") < 32.0 && p(&free, "ground.rt_mean") < 0.65,
+        "{:?}",
+        free.final_stage
+    );
+    let rt = &fixed.measured_from_tracks[0];
+    assert!(rt.fixed && (0.75..0.82).contains(&rt.value) && rt.bounces >= 40, "{rt:?}");
+    assert_eq!(p(&fixed, "ground.rt_mean"), rt.value);
+    assert!((p(&fixed, "ground.friction_angle_deg") - 40.0).abs() < 3.0, "{:?}", fixed.final_stage);
+    assert!((p(&fixed, "ground.rn_mean") - 0.6).abs() < 0.08, "{:?}", fixed.final_stage);
+    assert!((7.0..14.0).contains(&p(&fixed, "speed_restitution.k_mps")), "{:?}", fixed.final_stage);
+}
+
 #[test]
 fn the_final_evaluation_reports_the_models_the_loop_diagnosed_as_if_simulated_afresh() {
     // The final evaluation reuses the loop's simulations (run-outs and bounces) of the models it diagnosed: the
@@ -1060,12 +1094,8 @@ fn the_final_evaluation_reports_the_models_the_loop_diagnosed_as_if_simulated_af
     // campaign the loop keeps speed-dependent restitution in round 1 and nothing in round 2. Stopped before round 1
     // (max_rounds 0) or after it (1), nothing is reused for the baseline or the final model respectively: every
     // figure must be the same.
-    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign_tracked");
-    let campaign = talus::campaign::Campaign::read(&shipped).unwrap();
-    let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, 20.0).unwrap();
     let cfg = CalibrationConfig::default();
-    let model =
-        talus::calibrate::model2d::Model2d::new(&campaign, runs, groups, &shipped.join("profile.csv"), &cfg).unwrap();
+    let model = shipped_tracked_profile(&cfg);
     let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
     let run = |rounds: usize| {
         let mut c = cfg.clone();

@@ -341,6 +341,9 @@ pub struct CalibrationConfig {
     /// the release), each height plus Gaussian noise of this sd ([`super::rebound::ReboundMeter`]); unset, every
     /// sample of the simulated path counts as it is (default; right for smoothed or exact tracks).
     pub track_noise_m: Option<f64>,
+    /// Fix each 2DLM material's `rt_mean` the settings leave unset at the tangential restitution the calibration
+    /// runs' tracks measure on it ([`super::measured`]; default false: measured and reported, not used).
+    pub fix_rt_from_tracks: bool,
     /// Most objective evaluations of the population fit (default 60 for 3DRB, 300 for 2DLM).
     pub max_evaluations: Option<usize>,
     /// Threads (default 0: all cores). Results do not depend on it.
@@ -378,6 +381,7 @@ impl Default for CalibrationConfig {
             objective: Objective::default(),
             rebound_weight: None,
             track_noise_m: None,
+            fix_rt_from_tracks: false,
             max_evaluations: None,
             threads: 0,
             materials: BTreeMap::new(),

@@ -35,7 +35,7 @@
 //! error of the best one's is kept (the one-standard-error rule, [`choose`]; `one_se_rule = false`: the largest
 //! cut), then refitted with the optimiser (together with the base parameters), and the loop starts again.
 
-use super::config::{CalibrationConfig, ModelKind};
+use super::config::{CalibrationConfig, ModelKind, ParamSetting};
 use super::diagnose::{diagnose, merged, spread_check, Diagnostic, DEPOSITION_EXCESS};
 use super::effects::{
     definition, effects_for, recentring, EffectDef, EffectKind, Recentring, CR_SCALE_GRID, MOBILITY_GRID,
@@ -46,8 +46,8 @@ use super::impacts::{self, BOUNCE_RESIDUAL};
 use super::model::{Model, RunSims, Sim};
 use super::objective::{run_score, score, score_of};
 use super::params::{
-    apply_mobility_2d, apply_mobility_3d, fold_mobility, friction_over, Candidate, EffectSpec, FreeParam, Region,
-    MOBILITY,
+    apply_mobility_2d, apply_mobility_3d, fold_mobility, friction_over, normalize, Candidate, EffectSpec, FreeParam,
+    Region, MOBILITY,
 };
 use super::runs::FieldRun;
 use super::split::folds;
@@ -303,12 +303,11 @@ pub fn effects_loop(
             {
                 if e0_refit.is_none() {
                     (ctx.log)("  refitting the baseline in each fold");
-                    let starts: Vec<Candidate> =
-                        base_chosen.iter().map(|&c| folded(kind, model, &base_arm.cands[c])).collect();
+                    let starts: Vec<Candidate> = base_chosen.iter().map(|&c| folded(ctx, &base_arm.cands[c])).collect();
                     e0_refit = Some(refit_cv(ctx, &starts, &free, cal, &fold_of, &format!("round {round} baseline"))?);
                 }
                 (ctx.log)(&format!("  refitting {} in each fold", prop.label));
-                let starts: Vec<Candidate> = chosen.iter().map(|&c| folded(kind, model, &arm.cands[c])).collect();
+                let starts: Vec<Candidate> = chosen.iter().map(|&c| folded(ctx, &arm.cands[c])).collect();
                 (
                     e0_refit.clone().unwrap_or_default(),
                     refit_cv(ctx, &starts, &effect_free, cal, &fold_of, &prop.label)?,
@@ -403,7 +402,7 @@ pub fn effects_loop(
         }
         // Refit on all calibration runs: base parameters plus the effect's own.
         let spec = chosen.effect(&trial.label).cloned().expect("chosen candidate carries its effect");
-        let start = folded(kind, model, &chosen);
+        let start = folded(ctx, &chosen);
         let def = definition(kind, spec.kind).expect("effect defined for the model");
         (ctx.log)(&format!("effects loop, round {round}: keeping {}, refitting", spec.label));
         let (refit, _) = fit(
@@ -524,10 +523,21 @@ fn map_params(c: &mut Candidate, suffixes: &[&str], f: impl Fn(f64) -> f64) {
     }
 }
 
-/// A candidate with its mobility factor folded into the materials.
-fn folded(kind: ModelKind, model: &dyn Model, c: &Candidate) -> Candidate {
+/// A candidate with its mobility factor folded into the materials, every material parameter the settings fix (or a
+/// campaign's tracks measured, [`super::measured`]) back at its fixed value: a re-centring arm moves them all, a
+/// refit starting from the result must not.
+fn folded(ctx: &Context, c: &Candidate) -> Candidate {
+    let (model, kind) = (ctx.model, ctx.model.kind());
     let mut out = c.clone();
     out.params = fold_mobility(kind, &c.params, model.materials());
+    for m in model.materials() {
+        for p in kind.material_parameters() {
+            if let Some(ParamSetting::Fixed(v)) = ctx.cfg.used_setting(kind, m, p) {
+                out.params.set(format!("{m}.{p}"), v);
+            }
+        }
+    }
+    normalize(&mut out.params);
     out
 }
 

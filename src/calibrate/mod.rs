@@ -24,6 +24,7 @@ pub mod effects_loop;
 pub mod fit;
 pub mod impacts;
 pub mod maps;
+pub mod measured;
 pub mod metrics;
 pub mod model;
 pub mod model2d;
@@ -139,6 +140,19 @@ pub fn calibrate(
     let mut cfg = cfg.clone();
     if cfg.rebound_weight.is_none() {
         cfg.rebound_weight = objective::default_rebound_weight(model.runs(), cal);
+    }
+    let measured = measured::from_tracks(&mut cfg, model, cal);
+    for m in &measured {
+        log(&format!(
+            "{}.{}: {:.3} from the tracks (median of {} bounces on it, quartiles {:.3}-{:.3}){}",
+            m.material,
+            m.parameter,
+            m.value,
+            m.bounces,
+            m.quartiles[0],
+            m.quartiles[1],
+            if m.fixed { ", fixed there" } else { ", not fixed" }
+        ));
     }
     let tracked = cal.iter().filter(|&&i| model.runs()[i].rebound_height_m.is_some()).count();
     let scatters: Vec<f64> = cal.iter().filter_map(|&i| model.runs()[i].track_scatter_m).collect();
@@ -295,6 +309,7 @@ pub fn calibrate(
         zone_check: Some((&zc).into()),
         track_scatter_m: track_scatter,
         bounces,
+        measured_from_tracks: measured,
         back_analysis: back,
         population_fit: serde_json::json!({
             "objective": cfg.objective,

@@ -163,6 +163,10 @@ pub trait Model: Sync {
     fn read_impacts(&self, _track: &[TrackPoint], _noise_m: f64) -> Vec<super::impacts::Impact> {
         Vec::new()
     }
+    /// The material parameters the tracks of runs `which` measure directly ([`super::measured`]); none by default.
+    fn measured_by_tracks(&self, _which: &[usize]) -> Vec<super::measured::Measured> {
+        Vec::new()
+    }
     /// Applies a candidate.
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>>;
     /// The model at `candidate` as a scenario for `talus run` (3DRB) or `talus profile` (2DLM) with `repeats`

@@ -5,6 +5,7 @@
 use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::impacts::{read_impacts, Impact};
+use super::measured::{Measured, MIN_BOUNCES_MEASURED};
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
 use super::rebound::{attach_tracks, rebound_meter, ReboundMeter};
@@ -242,6 +243,20 @@ impl Model for Model2d {
 
     fn read_impacts(&self, track: &[TrackPoint], noise_m: f64) -> Vec<Impact> {
         profile_impacts(&self.profile, track, noise_m)
+    }
+
+    /// Rt of each material from the tangential restitutions of the observed bounces on it.
+    fn measured_by_tracks(&self, which: &[usize]) -> Vec<Measured> {
+        let mut rt: Vec<Vec<f64>> = vec![Vec::new(); self.materials.len()];
+        for i in which.iter().flat_map(|&r| &self.runs[r].impacts) {
+            if let Some(e) = i.tangential_restitution {
+                rt[slope_at(&self.profile, i.position_m[0]).1].push(e);
+            }
+        }
+        (self.materials.iter().zip(&rt))
+            .filter(|(_, v)| v.len() >= MIN_BOUNCES_MEASURED)
+            .map(|(m, v)| Measured::of(m, "rt_mean", v))
+            .collect()
     }
 
     fn prepare<'a>(&'a self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'a>> {

@@ -130,6 +130,10 @@ pub struct Report {
     /// paths read the same way, per set; empty without tracks.
     #[serde(default)]
     pub bounces: Vec<super::impacts::BounceComparison>,
+    /// Material parameters the calibration runs' tracks measure ([`super::measured`]), fixed there unless the
+    /// settings give them; empty without tracks.
+    #[serde(default)]
+    pub measured_from_tracks: Vec<super::measured::Measured>,
     /// Per-run back-analysis (mean ± sd per material).
     pub back_analysis: Vec<BackAnalysisRow>,
     /// Objective evaluations of the population fit and its final value.
@@ -674,6 +678,20 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
     for n in names {
         let g = |p: &Params| p.get(n).map(|v| format!("{v:.4}")).unwrap_or_else(|| "–".into());
         let _ = writeln!(s, "| {n} | {} | {} |", g(&r.baseline.parameters), g(&r.final_stage.parameters));
+    }
+    for m in &r.measured_from_tracks {
+        let key = format!("{}.{}", m.material, m.parameter);
+        let how = if m.fixed {
+            "fixed there (`fix_rt_from_tracks`)".to_string()
+        } else {
+            let fitted = |p: &Params| p.get(&key).map_or("–".to_string(), fmt);
+            format!(
+                "not fixed: fitted {} (baseline) and {} (final); `fix_rt_from_tracks = true` fixes it where the settings leave it unset",
+                fitted(&r.baseline.parameters),
+                fitted(&r.final_stage.parameters)
+            )
+        };
+        let _ = writeln!(s, "\n`{key}` measured by the calibration runs' tracks: {}, the median tangential restitution of {} bounces on it (quartiles {}–{}; mean ± sd {} ± {}); {how} (docs/calibration.md, \"Rt from the tracks\").", fmt(m.value), m.bounces, fmt(m.quartiles[0]), fmt(m.quartiles[1]), fmt(m.mean), fmt(m.sd));
     }
     match scenario {
         Some(f) if f == super::scenario_file::PROFILE_SCENARIO => {
