@@ -1,4 +1,5 @@
-//! Parameters a campaign's tracks measure directly: fixed at the measured value instead of fitted (ours).
+//! Parameters a campaign's tracks measure directly: reported beside the fit and, on request, fixed at the measured
+//! value instead of fitted (ours).
 //!
 //! In the lumped-mass model (2DLM, RocFall semantics, physics.md §3) an impact multiplies the speed along the slope
 //! by Rt, whatever happens to the normal speed. The tangential restitution of the centre of mass read from a tracked
