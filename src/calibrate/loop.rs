@@ -1061,4 +1061,25 @@ mod tests {
         assert!((d.to_radians().tan() - 20f64.to_radians().tan() / 1.2).abs() < 1e-12, "{d}");
         assert_eq!((c.params.get("a.cr_mean"), c.params.get("a.static_friction_deg")), (Some(0.3), Some(40.0)));
     }
+
+    #[test]
+    fn folding_a_recentred_candidate_keeps_the_fixed_parameters_fixed() {
+        // A 2DLM campaign with Rt fixed at 0.8: the mobility factor 1.44 moves Rn, Rt and friction; folded into the
+        // materials, Rn and friction keep the move and Rt is back at 0.8.
+        use crate::calibrate::synthetic::{case_2d, synthetic_2d};
+        let model = synthetic_2d(&case_2d("control_a", 1).unwrap(), crate::lumped2d::Options2d::default()).unwrap();
+        let mut cfg = CalibrationConfig::default();
+        cfg.materials.entry("ground".into()).or_default().insert("rt_mean".into(), ParamSetting::Fixed(0.8));
+        let quiet = |_: &str| {};
+        let ctx = Context::new(&model, &cfg, &quiet);
+        let (mut c, _) = crate::calibrate::base_candidate(&model, &cfg);
+        let get = |c: &Candidate, k: &str| c.params.get(&format!("ground.{k}")).unwrap();
+        let (rn, f) = (get(&c, "rn_mean"), get(&c, "friction_angle_deg"));
+        c.params.set(MOBILITY, 1.44);
+        let out = folded(&ctx, &c);
+        assert_eq!(out.params.get(MOBILITY), None);
+        assert_eq!(get(&out, "rt_mean"), 0.8);
+        assert!((get(&out, "rn_mean") - (rn * 1.44).min(1.0)).abs() < 1e-12);
+        assert!((get(&out, "friction_angle_deg") - friction_over(f, 1.44)).abs() < 1e-12);
+    }
 }
