@@ -1066,8 +1066,11 @@ fn rt_fixed_from_the_tracks_settles_the_trade_of_rt_against_friction() {
     // run-outs and rebound heights, the final model keeps a low Rt with a low friction angle (measured: 0.54, 27°);
     // with Rt fixed at the tracks' median tangential restitution (0.78) the loop ends near the truth (40.4°, Rn 0.62,
     // K 9.5 m/s).
+    let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign_tracked");
+    let fix_cfg = CalibrationConfig::read(&shipped.join("rt_from_tracks.toml")).unwrap();
+    assert!(fix_cfg.fix_rt_from_tracks);
     let fitted = |fix: bool| {
-        let cfg = CalibrationConfig { fix_rt_from_tracks: fix, ..CalibrationConfig::default() };
+        let cfg = if fix { fix_cfg.clone() } else { CalibrationConfig::default() };
         let model = shipped_tracked_profile(&cfg);
         let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
         calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report
