@@ -132,6 +132,8 @@ pub struct Diagnosed {
     pub bounces: Option<Vec<(usize, Vec<impacts::Impact>)>>,
     /// The run-out (and bounce) diagnostics.
     pub diagnostics: Vec<Diagnostic>,
+    /// The zone check (draws seeded by `seed` + round), when a zone is a candidate.
+    pub zone_check: Option<super::zone::ZoneCheck>,
 }
 
 #[derive(Clone)]
@@ -184,14 +186,15 @@ pub fn effects_loop(
             }
             diags = merged(diags, bounce);
         }
+        let zone_allowed = allowed.iter().any(|d| d.kind == EffectKind::Zone);
+        let zc = zone_allowed.then(|| zone_check(model, &diag_sims, &frame, 199, cfg.seed.wrapping_add(round as u64)));
         out.rounds.push(Diagnosed {
             candidate: current.clone(),
             sims: diag_sims.clone(),
             bounces: bounce_sims,
             diagnostics: diags.clone(),
+            zone_check: zc.clone(),
         });
-        let zone_allowed = allowed.iter().any(|d| d.kind == EffectKind::Zone);
-        let zc = zone_allowed.then(|| zone_check(model, &diag_sims, &frame, 199, cfg.seed.wrapping_add(round as u64)));
         if let Some(z) = &zc {
             (ctx.log)(&format!(
                 "effects loop, round {round}: zone check p = {:.3} (largest deposition excess {:.3}, p {:.3}; \

@@ -21,7 +21,7 @@
 
 use super::config::{CalibrationConfig, ParamSetting};
 use super::model::Model;
-use super::stats::{mean, median, quantile_sorted, sample_sd};
+use super::stats::{mean, quantile_sorted, sample_sd, sorted};
 use serde::{Deserialize, Serialize};
 
 /// Fewest bounces on a material that measure its parameter.
@@ -52,12 +52,11 @@ pub struct Measured {
 impl Measured {
     /// `parameter` of `material` measured by `values` (at least one).
     pub fn of(material: &str, parameter: &str, values: &[f64]) -> Measured {
-        let mut s = values.to_vec();
-        s.sort_by(f64::total_cmp);
+        let s = sorted(values);
         Measured {
             material: material.into(),
             parameter: parameter.into(),
-            value: median(values),
+            value: quantile_sorted(&s, 0.5),
             quartiles: [quantile_sorted(&s, 0.25), quantile_sorted(&s, 0.75)],
             mean: mean(values),
             sd: sample_sd(values),

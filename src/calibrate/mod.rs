@@ -230,7 +230,6 @@ pub fn calibrate(
         ));
     }
     let mut bounces = Vec::new();
-    let (mut base_bounce_diags, mut final_bounce_diags) = (Vec::new(), Vec::new());
     let observed_hold = impacts::observed_summary(model, hold);
     for (set, which, observed) in [("calibration", cal, impact_summary), ("holdout", hold, observed_hold)] {
         if let Some(observed) = observed {
@@ -245,8 +244,6 @@ pub fn calibrate(
             if set == "calibration" {
                 baseline_ranks = impacts::bounce_ranks(runs, &baseline_b);
                 final_ranks = impacts::bounce_ranks(runs, &final_b);
-                base_bounce_diags = impacts::bounce_diagnostics(&baseline_ranks, cfg.effects.permutations, cfg.seed);
-                final_bounce_diags = impacts::bounce_diagnostics(&final_ranks, cfg.effects.permutations, cfg.seed);
             }
             bounces.push(impacts::BounceComparison {
                 set: set.into(),
@@ -259,14 +256,22 @@ pub fn calibrate(
         }
     }
     // The loop diagnosed the baseline (round 1) and a final model its last round kept nothing to; else here.
-    let diagnostics = |c: &Candidate, sims: &[RunSims], bounce| match diagnosed(c) {
+    let cal_bounces = bounces.iter().find(|b| b.set == "calibration");
+    let diagnostics = |c: &Candidate, sims: &[RunSims], ranks: Option<&Vec<impacts::BounceRanks>>| match diagnosed(c) {
         Some(r) => r.diagnostics.clone(),
-        None => diagnose::merged(diagnose::diagnose(model, sims, cfg.effects.permutations, cfg.seed).1, bounce),
+        None => diagnose::merged(
+            diagnose::diagnose(model, sims, cfg.effects.permutations, cfg.seed).1,
+            ranks.map_or_else(Vec::new, |r| impacts::bounce_diagnostics(r, cfg.effects.permutations, cfg.seed)),
+        ),
     };
-    let diag_base = diagnostics(&baseline, &base_cal, base_bounce_diags);
-    let diag_final = diagnostics(&final_c, &final_cal, final_bounce_diags);
+    let diag_base = diagnostics(&baseline, &base_cal, cal_bounces.map(|b| &b.baseline_ranks));
+    let diag_final = diagnostics(&final_c, &final_cal, cal_bounces.map(|b| &b.final_ranks));
     let frame = model.map_frame();
-    let zc = zone::zone_check(model, &base_cal, &frame, 199, cfg.seed.wrapping_add(1));
+    // The loop's first round checked the baseline with the same draws when a zone was a candidate.
+    let zc = match diagnosed(&baseline).and_then(|r| r.zone_check.clone()) {
+        Some(z) => z,
+        None => zone::zone_check(model, &base_cal, &frame, 199, cfg.seed.wrapping_add(1)),
+    };
     let ids = |v: &[usize]| v.iter().map(|&i| runs[i].id.clone()).collect::<Vec<_>>();
     let labels = |c: &Candidate| c.effects.iter().map(|e| e.label.clone()).collect::<Vec<_>>();
     let release_groups = model
