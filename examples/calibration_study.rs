@@ -8,7 +8,8 @@
 //! zone rough speed_tracked speed_mixed_tracked size_tracked speed_2 speed_3 speed_tracked_2 speed_tracked_3
 //! control_a_N control_b_N control_c_N control_d_N control_e_N control_a_tracked_N control_d_tracked_N 2d_speed
 //! 2d_speed_tracked 2d_control_a_tracked_N 2d_size 2d_zone 2d_control_a_N 2d_control_b_N, N = 1..3, a trailing *
-//! matches a prefix; default: all)
+//! matches a prefix; default: all; STUDY_SEEDS=N runs the controls on seeds 1..=N; STUDY_CONFIG=FILE reads the
+//! settings from FILE)
 use std::time::Instant;
 use talus::calibrate::synthetic::{case_2d, case_3d, synthetic_2d, synthetic_3d, zone_overlap, Hidden};
 use talus::calibrate::{self, params::Region, split, CalibrationConfig, Model};
@@ -30,7 +31,9 @@ fn main() {
     let mut rows: Vec<serde_json::Value> =
         std::fs::read_to_string(&summary).ok().and_then(|t| serde_json::from_str(&t).ok()).unwrap_or_default();
     let mut cases: Vec<(String, MakeModel, Hidden)> = Vec::new();
-    let seeds = [1u64, 2, 3];
+    // The control cases' seeds: 1..=3, or 1..=STUDY_SEEDS.
+    let n_seeds = std::env::var("STUDY_SEEDS").ok().and_then(|v| v.parse::<u64>().ok()).unwrap_or(3);
+    let seeds: Vec<u64> = (1..=n_seeds).collect();
     // The effect cases on data seed 1 (`NAME`), and the speed case with and without tracks on seeds 2 and 3 as well
     // (`NAME_2`, `NAME_3`).
     let effect_cases = [
@@ -55,7 +58,7 @@ fn main() {
     for base in
         ["control_a", "control_b", "control_c", "control_d", "control_e", "control_a_tracked", "control_d_tracked"]
     {
-        for s in seeds {
+        for &s in &seeds {
             let spec = case_3d(base, s).unwrap();
             cases.push((
                 format!("{base}_{s}"),

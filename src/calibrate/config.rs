@@ -336,6 +336,11 @@ pub struct CalibrationConfig {
     /// ([`super::objective::score`]); default: the ratio of the observed spreads on the calibration runs
     /// ([`super::objective::default_rebound_weight`]), 0 without tracked paths.
     pub rebound_weight: Option<f64>,
+    /// Metres of run-out one unit of tangential restitution counts for, per observed bounce, in the score of a
+    /// tracked 2DLM run ([`super::objective::bounce_crps`]); default: the ratio of the observed spreads on the
+    /// calibration runs ([`super::objective::default_bounce_weight`]) where the model reads its simulated bounces
+    /// (2DLM) and the tracks show at least 20 bounces with a tangential restitution, else 0.
+    pub bounce_weight: Option<f64>,
     /// Standard deviation of the tracking system's error on a tracked point's height, m. When set, every simulated
     /// path of a tracked run is measured as its track was: at the track's times (since its first point, taken as
     /// the release), each height plus Gaussian noise of this sd ([`super::rebound::ReboundMeter`]); unset, every
@@ -380,6 +385,7 @@ impl Default for CalibrationConfig {
             release_attempts: 1,
             objective: Objective::default(),
             rebound_weight: None,
+            bounce_weight: None,
             track_noise_m: None,
             fix_rt_from_tracks: false,
             max_evaluations: None,
@@ -558,6 +564,13 @@ impl CalibrationConfig {
                 f("rebound_weight"),
                 "must be a non-negative number",
                 "leave it out (the ratio of observed spreads) or use 0 to score run-outs only",
+            ));
+        }
+        if self.bounce_weight.is_some_and(|w| !(w.is_finite() && w >= 0.0)) {
+            return Err(Error::invalid(
+                f("bounce_weight"),
+                "must be a non-negative number",
+                "leave it out (bounces not scored) or use the ratio of observed spreads the log gives",
             ));
         }
         if self.track_noise_m.is_some_and(|w| !(w.is_finite() && w >= 0.0)) {

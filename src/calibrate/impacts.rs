@@ -406,20 +406,32 @@ pub fn simulated_impacts(
         runs.iter().map(|&i| &model.runs()[i]).filter(|r| !r.track_times_s.is_empty()).collect();
     let read: Vec<Vec<Impact>> = crate::parallel::collect_in_order(tracked.len() * repeats, threads, |k| {
         let (run, repeat) = (tracked[k / repeats], k % repeats);
-        let path = prepared.path(run, repeat, seed);
-        match noise_m {
-            Some(sd) => {
-                let mut rng = stream(seed ^ SIMULATED_TRACK_SEED, super::model::stream_index(run.index, repeat));
-                model.read_impacts(&at_times(&path, &run.track_times_s, sd, &mut rng), sd)
-            }
-            None => model.read_impacts(&path, 0.0),
-        }
+        read_as_tracked(model, run, repeat, seed, &prepared.path(run, repeat, seed), noise_m)
     });
     Ok(tracked
         .iter()
         .zip(read.chunks(repeats.max(1)))
         .map(|(run, per_repeat)| (run.index, per_repeat.iter().flatten().cloned().collect()))
         .collect())
+}
+
+/// The bounces of `path`, the simulated path of repeat `repeat` of the tracked `run` with `seed`, read as the run's
+/// track was (see [`simulated_impacts`]).
+pub fn read_as_tracked(
+    model: &dyn Model,
+    run: &FieldRun,
+    repeat: usize,
+    seed: u64,
+    path: &[TrackPoint],
+    noise_m: Option<f64>,
+) -> Vec<Impact> {
+    match noise_m {
+        Some(sd) => {
+            let mut rng = stream(seed ^ SIMULATED_TRACK_SEED, super::model::stream_index(run.index, repeat));
+            model.read_impacts(&at_times(path, &run.track_times_s, sd, &mut rng), sd)
+        }
+        None => model.read_impacts(path, 0.0),
+    }
 }
 
 /// The summary of [`simulated_impacts`]'s bounces, `repeats` paths per run.

@@ -747,10 +747,7 @@ struct CvError {
 impl CvError {
     /// The errors of `run`'s simulations `s`.
     fn of(cfg: &CalibrationConfig, run: &FieldRun, s: &RunSims) -> CvError {
-        CvError {
-            crps_m: run_score(cfg.rebound_weight.unwrap_or(0.0), run, s),
-            abs_m: (s.median_runout() - run.runout_m).abs(),
-        }
+        CvError { crps_m: run_score(cfg, run, s), abs_m: (s.median_runout() - run.runout_m).abs() }
     }
 }
 

@@ -141,6 +141,14 @@ pub fn calibrate(
     if cfg.rebound_weight.is_none() {
         cfg.rebound_weight = objective::default_rebound_weight(model.runs(), cal);
     }
+    if !model.reads_bounces() {
+        if cfg.bounce_weight.is_some_and(|w| w > 0.0) {
+            log("note: bounce_weight is set but this model does not read its simulated bounces (2DLM on tracked runs only): it is unused");
+        }
+        cfg.bounce_weight = Some(0.0);
+    } else if cfg.bounce_weight.is_none() {
+        cfg.bounce_weight = objective::default_bounce_weight(model.runs(), cal);
+    }
     let measured = measured::from_tracks(&mut cfg, model, cal);
     for m in &measured {
         log(&format!(
@@ -163,6 +171,11 @@ pub fn calibrate(
             "{tracked} calibration runs were tracked: each one's rebound-height CRPS counts {:.1} m of run-out",
             cfg.rebound_weight.unwrap_or(0.0)
         ));
+        if let Some(w) = cfg.bounce_weight.filter(|&w| w > 0.0) {
+            log(&format!(
+                "each tracked bounce's tangential-restitution CRPS counts {w:.1} m of run-out (bounce_weight)"
+            ));
+        }
         if let Some(sd) = model.track_noise_m() {
             log(&format!("simulated paths are read at the tracks' times with {sd} m of tracking noise"));
         }

@@ -36,6 +36,10 @@ pub struct PathSummary {
     pub rebound_height_m: f64,
     /// Share of the horizontal path over each material of the model (declared materials first, then zones).
     pub material_fraction: Vec<f64>,
+    /// The tangential restitutions of the bounces read from the path as its run's track was
+    /// ([`super::impacts::read_as_tracked`]), for the bounce score ([`super::objective::bounce_crps`]); empty where
+    /// the model does not read them (3DRB, untracked runs).
+    pub tangential_restitutions: Vec<f64>,
 }
 
 /// One simulation of one run.
@@ -162,6 +166,11 @@ pub trait Model: Sync {
     /// ([`super::impacts::read_impacts`]); none where the model has no ground to read them on.
     fn read_impacts(&self, _track: &[TrackPoint], _noise_m: f64) -> Vec<super::impacts::Impact> {
         Vec::new()
+    }
+    /// True if the simulations of a tracked run read their bounces as its track was
+    /// ([`PathSummary::tangential_restitutions`], for the bounce score); false by default.
+    fn reads_bounces(&self) -> bool {
+        false
     }
     /// The material parameters the tracks of runs `which` measure directly ([`super::measured`]); none by default.
     fn measured_by_tracks(&self, _which: &[usize]) -> Vec<super::measured::Measured> {

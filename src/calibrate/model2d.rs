@@ -4,7 +4,7 @@
 
 use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
-use super::impacts::{read_impacts, Impact};
+use super::impacts::{read_as_tracked, read_impacts, Impact};
 use super::measured::{Measured, MIN_BOUNCES_MEASURED};
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
@@ -33,6 +33,10 @@ pub struct Model2d {
     /// Measure each simulated path's rebound height (only a tracked run needs it; it makes a 2DLM simulation about
     /// a third slower).
     rebounds: bool,
+    /// Read the bounces of each simulated path of a run whose track shows bounces with a tangential restitution,
+    /// for the bounce score (on where a run has such bounces, unless the settings give `bounce_weight = 0`; it
+    /// about doubles the cost of those runs' simulations).
+    bounce_reads: bool,
     /// The tracking error's sd, m, when simulated paths are read as the tracks were (`track_noise_m`).
     track_noise_m: Option<f64>,
     /// The campaign folder and the profile file, for [`Model::scenario_files`] (`None` when built from parts).
@@ -52,7 +56,9 @@ impl Model2d {
         let mut model = Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
             .with_release_attempts(cfg.release_attempts);
         model.files = Some((campaign.dir.clone(), profile_file.to_path_buf()));
-        model.with_tracks(&campaign.tracks, cfg.track_noise_m)
+        let mut model = model.with_tracks(&campaign.tracks, cfg.track_noise_m)?;
+        model.bounce_reads &= cfg.bounce_weight != Some(0.0);
+        Ok(model)
     }
 
     /// A model from a profile and options. For synthetic studies and tests.
@@ -89,6 +95,7 @@ impl Model2d {
             options,
             release_attempts: 1,
             rebounds,
+            bounce_reads: false,
             track_noise_m: None,
             files: None,
         })
@@ -120,6 +127,7 @@ impl Model2d {
             |q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z),
             |track, noise_m| profile_impacts(profile, track, noise_m),
         )?;
+        self.bounce_reads = self.runs.iter().any(has_tangential_bounce);
         Ok(self)
     }
 
@@ -245,6 +253,10 @@ impl Model for Model2d {
         profile_impacts(&self.profile, track, noise_m)
     }
 
+    fn reads_bounces(&self) -> bool {
+        self.bounce_reads
+    }
+
     /// Rt of each material from the tangential restitutions of the observed bounces on it.
     fn measured_by_tracks(&self, which: &[usize]) -> Vec<Measured> {
         let mut rt: Vec<Vec<f64>> = vec![Vec::new(); self.materials.len()];
@@ -355,6 +367,11 @@ impl Prepared for Prepared2d<'_> {
             summary.impact_angle_mean_deg /= summary.impacts as f64;
         }
         summary.end_slope_deg = slope_at(profile, r.end_x_m).0;
+        if self.model.bounce_reads && has_tangential_bounce(run) {
+            let path = Model2d::track(&self.slope, &self.options, run, repeat, seed);
+            let read = read_as_tracked(self.model, run, repeat, seed, &path, self.model.track_noise_m);
+            summary.tangential_restitutions = read.iter().filter_map(|i| i.tangential_restitution).collect();
+        }
         // Zones add materials after the declared ones; fold them into the fraction vector as they are.
         let path = obs.thinner.finish(r.end_x_m, 0.0);
         Sim {
@@ -425,6 +442,11 @@ impl Model2d {
         }
         track
     }
+}
+
+/// True if the track of `run` shows a bounce with a tangential restitution.
+fn has_tangential_bounce(run: &FieldRun) -> bool {
+    run.impacts.iter().any(|i| i.tangential_restitution.is_some())
 }
 
 /// The bounces of `track` (x along `profile`, z up) over the profile ([`read_impacts`]).

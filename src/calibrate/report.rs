@@ -616,7 +616,14 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             let _ = writeln!(s, "The tracked heights scatter by {} m around a smooth path (median over the calibration runs, an estimate of the tracking noise; `track_noise_m`: {declared}).\n", fmt(scatter));
         }
         if !r.bounces.is_empty() {
-            let _ = writeln!(s, "Bounces read from the tracks, and from each model's simulated paths read the same way (as rebound heights are: at the tracks' times with the declared tracking noise, or as recorded; `impacts.csv` lists the observed ones; docs/calibration.md, \"Impacts read from tracks\"). Only bounces with a readable flight on each side count, and a rigid body's centre does not come back at Cr: compare the rows, not a row with Cr.\n");
+            let _ = writeln!(s, "Bounces read from the tracks, and from each model's simulated paths read the same way (as rebound heights are: at the tracks' times with the declared tracking noise, or as recorded; `impacts.csv` lists the observed ones; docs/calibration.md, \"Impacts read from tracks\"). Only bounces with a readable flight on each side count, and a rigid body's centre does not come back at Cr: compare the rows, not a row with Cr.");
+            let weight = r.settings.bounce_weight.unwrap_or(0.0);
+            let scored = if weight > 0.0 {
+                format!("In the score each observed bounce's tangential-restitution CRPS against its run's simulated bounces counts {} m of run-out (`bounce_weight`; docs/calibration.md, \"Bounces in the score\").\n", fmt(weight))
+            } else {
+                "Not in the score (`bounce_weight` 0: 3DRB, fewer than 20 bounces with a tangential restitution, or set so).\n".to_string()
+            };
+            let _ = writeln!(s, "{scored}");
             let _ = writeln!(s, "| paths | bounces per path | normal restitution, median (quartiles) | tangential, median | normal impact speed, median m/s |");
             let _ = writeln!(s, "|---|---|---|---|---|");
             for b in &r.bounces {
