@@ -46,8 +46,8 @@ use super::impacts::{self, BOUNCE_RESIDUAL};
 use super::model::{Model, RunSims, Sim};
 use super::objective::{run_score, score, score_of};
 use super::params::{
-    apply_mobility_2d, apply_mobility_3d, fold_mobility, friction_over, normalize, Candidate, EffectSpec, FreeParam,
-    Region, MOBILITY,
+    apply_mobility_2d, apply_mobility_3d, fold_mobility, friction_over, mobility_scaled, normalize, Candidate,
+    EffectSpec, FreeParam, Region, MOBILITY,
 };
 use super::runs::FieldRun;
 use super::split::folds;
@@ -235,7 +235,7 @@ pub fn effects_loop(
         for &m in &MOBILITY_GRID {
             let mut c = current.clone();
             c.params.set(MOBILITY, m);
-            base_arm.settings.push(ctx.sims(&c, cal, cfg.screen_repeats())?);
+            base_arm.settings.push(ctx.sims(&screened(ctx, &c), cal, cfg.screen_repeats())?);
             base_arm.cands.push(c);
         }
         base_arm.fold_settings = vec![(0..base_arm.settings.len()).collect(); cfg.inner_folds];
@@ -264,7 +264,7 @@ pub fn effects_loop(
                             Recentring::DynamicFriction => scale_dynamic_friction(&mut c, m),
                             Recentring::Mobility => c.params.set(MOBILITY, m),
                         }
-                        arm.settings.push(ctx.sims(&c, cal, cfg.screen_repeats())?);
+                        arm.settings.push(ctx.sims(&screened(ctx, &c), cal, cfg.screen_repeats())?);
                         arm.cands.push(c);
                     }
                 }
@@ -542,6 +542,21 @@ fn folded(ctx: &Context, c: &Candidate) -> Candidate {
     }
     normalize(&mut out.params);
     out
+}
+
+/// The candidate a re-centring arm simulates for `c`: where the settings fix a parameter the re-centring moves (the
+/// mobility factor's, [`mobility_scaled`]), `c` [`folded`], so that the arm moves the free parameters only, as the
+/// refit from its choice will; elsewhere `c` itself (the same model, without the rounding of a fold).
+fn screened(ctx: &Context, c: &Candidate) -> Candidate {
+    let kind = ctx.model.kind();
+    let fixes_one = ctx.model.materials().iter().any(|m| {
+        mobility_scaled(kind).iter().any(|p| matches!(ctx.cfg.used_setting(kind, m, p), Some(ParamSetting::Fixed(_))))
+    });
+    if fixes_one {
+        folded(ctx, c)
+    } else {
+        c.clone()
+    }
 }
 
 /// Refitting cross-validation: in each fold, `free` is refitted from `starts[f]` on the other folds' runs
@@ -1081,5 +1096,11 @@ mod tests {
         assert_eq!(get(&out, "rt_mean"), 0.8);
         assert!((get(&out, "rn_mean") - (rn * 1.44).min(1.0)).abs() < 1e-12);
         assert!((get(&out, "friction_angle_deg") - friction_over(f, 1.44)).abs() < 1e-12);
+        // A re-centring arm simulates the folded candidate: Rt stays fixed there too.
+        assert_eq!(screened(&ctx, &c), out);
+        // With nothing the factor moves fixed (the standard deviations are, by default), the candidate itself.
+        let free = CalibrationConfig::default();
+        let ctx = Context::new(&model, &free, &quiet);
+        assert_eq!(screened(&ctx, &c), c);
     }
 }

@@ -176,6 +176,14 @@ pub fn apply_mobility_2d(rn: f64, rt: f64, friction_deg: f64, m: f64) -> (f64, f
     ((rn * m).clamp(0.0, 1.0), (1.0 - (1.0 - rt) / m).clamp(0.0, 1.0), friction_over(friction_deg, m))
 }
 
+/// The material parameters the mobility factor moves ([`apply_mobility_3d`], [`apply_mobility_2d`]).
+pub fn mobility_scaled(model: ModelKind) -> &'static [&'static str] {
+    match model {
+        ModelKind::Rigid3d => &["cr_mean", "static_friction_deg", "dynamic_friction_deg"],
+        ModelKind::Lumped2d => &["rn_mean", "rt_mean", "friction_angle_deg"],
+    }
+}
+
 /// The friction angle whose tangent is tan(`deg`)/`m`, degrees: `m` > 1 makes the contact more slippery.
 pub fn friction_over(deg: f64, m: f64) -> f64 {
     (deg.to_radians().tan() / m).atan().to_degrees()
