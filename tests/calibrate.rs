@@ -1066,8 +1066,9 @@ fn the_tracked_bounces_settle_the_trade_of_rt_against_friction() {
     // The shipped tracked profile campaign (truth Rn 0.6 falling with speed, K = 10 m/s; Rt 0.8; 40°; roughness 3°).
     // Fitted on run-outs and rebound heights alone (`bounce_weight = 0`), the final model keeps a low Rt with a low
     // friction angle (measured: 0.54, 27°); with the bounces' tangential restitutions in the score (the default) it
-    // ends near the truth (measured: Rt 0.805, 41.5°, Rn 0.55, K 10.7 m/s) and closer to the held-out run-outs; with
-    // Rt fixed at the tracks' median (`fix_rt_from_tracks`, 0.78) near it too (38.8°, Rn 0.59, K 10.0 m/s).
+    // ends near the truth (measured: Rt 0.806, 41.5°, Rn 0.60, K 9.9 m/s) and closer to the held-out run-outs (1.57
+    // against 2.21 m); with Rt fixed at the tracks' median (`fix_rt_from_tracks`, 0.78) near it too (39.3°, Rn 0.59,
+    // K 9.8 m/s).
     let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign_tracked");
     let fix_cfg = CalibrationConfig::read(&shipped.join("rt_from_tracks.toml")).unwrap();
     assert!(fix_cfg.fix_rt_from_tracks);

@@ -336,8 +336,8 @@ pub struct CalibrationConfig {
     /// ([`super::objective::score`]); default: the ratio of the observed spreads on the calibration runs
     /// ([`super::objective::default_rebound_weight`]), 0 without tracked paths.
     pub rebound_weight: Option<f64>,
-    /// Metres of run-out one unit of tangential restitution counts for, per observed bounce, in the score of a
-    /// tracked 2DLM run ([`super::objective::bounce_crps`]); default: the ratio of the observed spreads on the
+    /// Metres of run-out one unit of tangential restitution counts for in the score of a tracked 2DLM run (its
+    /// bounces' mean CRPS) ([`super::objective::bounce_crps`]); default: the ratio of the observed spreads on the
     /// calibration runs ([`super::objective::default_bounce_weight`]) where the model reads its simulated bounces
     /// (2DLM) and the tracks show at least 20 bounces with a tangential restitution, else 0.
     pub bounce_weight: Option<f64>,

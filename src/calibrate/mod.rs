@@ -173,7 +173,7 @@ pub fn calibrate(
         ));
         if let Some(w) = cfg.bounce_weight.filter(|&w| w > 0.0) {
             log(&format!(
-                "each tracked bounce's tangential-restitution CRPS counts {w:.1} m of run-out (bounce_weight)"
+                "the mean tangential-restitution CRPS of a tracked run's bounces counts {w:.1} m of run-out (bounce_weight)"
             ));
         }
         if let Some(sd) = model.track_noise_m() {

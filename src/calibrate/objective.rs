@@ -13,9 +13,9 @@
 //! tell an effect that kills the bounce of fast impacts from a lower restitution everywhere; the rebound heights
 //! can (docs/calibration.md).
 //!
-//! **Tracked bounces** (ours, 2DLM): each bounce a tracked run's track shows with a tangential restitution adds
-//! `bounce_weight` times the CRPS of the tangential restitutions of the run's simulated bounces, read as the track
-//! was, against it ([`bounce_crps`]); the default weight is again the ratio of the observed spreads
+//! **Tracked bounces** (ours, 2DLM): a tracked run whose track shows bounces with a tangential restitution adds
+//! `bounce_weight` times the mean over them of the CRPS of the tangential restitutions of the run's simulated
+//! bounces, read as the track was, against each ([`bounce_crps`]); the default weight is again the ratio of the observed spreads
 //! ([`default_bounce_weight`]). In the lumped-mass model that ratio is Rt: run-outs alone trade Rt against the
 //! friction angle, the bounces do not (docs/calibration.md, "Bounces in the score").
 
@@ -61,11 +61,11 @@ pub fn run_score(cfg: &CalibrationConfig, run: &FieldRun, s: &RunSims) -> f64 {
     crps(&s.runouts(), run.runout_m) + track_score(cfg, run, s)
 }
 
-/// The bounce score of a tracked run (ours): the sum over the bounces its track shows with a tangential
+/// The bounce score of a tracked run (ours): the mean over the bounces its track shows with a tangential
 /// restitution of the CRPS of the tangential restitutions of its simulated paths' bounces, read as the track was
 /// ([`super::impacts::read_as_tracked`]), against the observed one; a run whose simulated paths show no such
-/// bounce scores as if they all read 0 (the speed along the ground lost). Summed, not averaged: each observed
-/// bounce counts. `None` for a run without such a bounce.
+/// bounce scores as if they all read 0 (the speed along the ground lost). Averaged, as a run's rebound height is one
+/// figure: a run's bounces count once beside its run-out. `None` for a run without such a bounce.
 pub fn bounce_crps(run: &FieldRun, s: &RunSims) -> Option<f64> {
     let observed: Vec<f64> = run.impacts.iter().filter_map(|i| i.tangential_restitution).collect();
     if observed.is_empty() {
@@ -76,11 +76,12 @@ pub fn bounce_crps(run: &FieldRun, s: &RunSims) -> Option<f64> {
     if simulated.is_empty() {
         simulated.push(0.0);
     }
-    Some(observed.iter().map(|&o| crps(&simulated, o)).sum())
+    Some(mean(&observed.iter().map(|&o| crps(&simulated, o)).collect::<Vec<_>>()))
 }
 
 /// The default bounce weight on calibration runs `which`: the mean absolute deviation from the median of their
-/// observed run-outs over that of the tangential restitutions of their tracks' bounces; `None` with fewer than
+/// observed run-outs over that of the tangential restitutions of their tracks' bounces (as for rebound heights);
+/// `None` with fewer than
 /// [`super::measured::MIN_BOUNCES_MEASURED`] such bounces or no spread.
 pub fn default_bounce_weight(runs: &[FieldRun], which: &[usize]) -> Option<f64> {
     let et: Vec<f64> = which.iter().flat_map(|&i| &runs[i].impacts).filter_map(|i| i.tangential_restitution).collect();
@@ -176,22 +177,22 @@ mod tests {
     }
 
     #[test]
-    fn every_observed_bounce_counts_in_the_bounce_score() {
+    fn a_runs_bounces_count_once_beside_its_run_out() {
         let mut r = run(0, 0, 10.0);
         let mut s = sims(0, &[10.0, 10.0]);
         assert_eq!(bounce_crps(&r, &s), None, "no track, no score");
         r.impacts = vec![bounce(Some(0.8)), bounce(None), bounce(Some(0.6))];
         // No simulated bounce: read as restitution 0, each observed bounce scores its own value.
-        assert!((bounce_crps(&r, &s).unwrap() - 1.4).abs() < 1e-12);
-        // Sharp simulated bounces at 0.7: |0.8 − 0.7| + |0.6 − 0.7|.
+        assert!((bounce_crps(&r, &s).unwrap() - 0.7).abs() < 1e-12);
+        // Sharp simulated bounces at 0.7: the mean of |0.8 − 0.7| and |0.6 − 0.7|.
         for x in &mut s.sims {
             x.summary.tangential_restitutions = vec![0.7];
         }
-        assert!((bounce_crps(&r, &s).unwrap() - 0.2).abs() < 1e-12);
+        assert!((bounce_crps(&r, &s).unwrap() - 0.1).abs() < 1e-12);
         // Weighted into the run's score beside its run-out CRPS (0 here), off at weight 0.
         let cfg = CalibrationConfig { bounce_weight: Some(10.0), rebound_weight: Some(0.0), ..Default::default() };
-        assert!((run_score(&cfg, &r, &s) - 2.0).abs() < 1e-9);
-        assert!((score(&cfg, std::slice::from_ref(&r), std::slice::from_ref(&s)) - 2.0).abs() < 1e-9);
+        assert!((run_score(&cfg, &r, &s) - 1.0).abs() < 1e-9);
+        assert!((score(&cfg, std::slice::from_ref(&r), std::slice::from_ref(&s)) - 1.0).abs() < 1e-9);
         let off = CalibrationConfig { bounce_weight: Some(0.0), ..cfg };
         assert_eq!(run_score(&off, &r, &s), 0.0);
     }

@@ -619,7 +619,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             let _ = writeln!(s, "Bounces read from the tracks, and from each model's simulated paths read the same way (as rebound heights are: at the tracks' times with the declared tracking noise, or as recorded; `impacts.csv` lists the observed ones; docs/calibration.md, \"Impacts read from tracks\"). Only bounces with a readable flight on each side count, and a rigid body's centre does not come back at Cr: compare the rows, not a row with Cr.");
             let weight = r.settings.bounce_weight.unwrap_or(0.0);
             let scored = if weight > 0.0 {
-                format!("In the score each observed bounce's tangential-restitution CRPS against its run's simulated bounces counts {} m of run-out (`bounce_weight`; docs/calibration.md, \"Bounces in the score\").\n", fmt(weight))
+                format!("In the score the mean tangential-restitution CRPS of a tracked run's observed bounces against its simulated ones counts {} m of run-out (`bounce_weight`; docs/calibration.md, \"Bounces in the score\").\n", fmt(weight))
             } else {
                 "Not in the score (`bounce_weight` 0: 3DRB, fewer than 20 bounces with a tangential restitution, or set so).\n".to_string()
             };
