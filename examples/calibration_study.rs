@@ -30,6 +30,13 @@ fn main() {
     let summary = out.join("summary.json");
     let mut rows: Vec<serde_json::Value> =
         std::fs::read_to_string(&summary).ok().and_then(|t| serde_json::from_str(&t).ok()).unwrap_or_default();
+    let cfg = match std::env::var("STUDY_CONFIG") {
+        Ok(p) => CalibrationConfig::read(std::path::Path::new(&p)).unwrap(),
+        Err(_) => CalibrationConfig::default(),
+    };
+    // The synthetic models read their simulated bounces as a model read from files with these settings would.
+    let bounces = cfg.bounce_weight != Some(0.0);
+    let bounces_3d = cfg.bounce_weight.is_some_and(|w| w > 0.0);
     let mut cases: Vec<(String, MakeModel, Hidden)> = Vec::new();
     // The control cases' seeds: 1..=3, or 1..=STUDY_SEEDS.
     let n_seeds = std::env::var("STUDY_SEEDS").ok().and_then(|v| v.parse::<u64>().ok()).unwrap_or(3);
@@ -53,7 +60,8 @@ fn main() {
     for (label, name, seed) in effect_cases {
         let spec = case_3d(name, seed).unwrap();
         let hidden = spec.hidden.clone();
-        cases.push((label, Box::new(move || Box::new(synthetic_3d(&spec, SimParams::default()).unwrap())), hidden));
+        let make = move || synthetic_3d(&spec, SimParams::default()).unwrap().with_bounce_reads(bounces_3d);
+        cases.push((label, Box::new(move || Box::new(make())), hidden));
     }
     for base in
         ["control_a", "control_b", "control_c", "control_d", "control_e", "control_a_tracked", "control_d_tracked"]
@@ -62,7 +70,9 @@ fn main() {
             let spec = case_3d(base, s).unwrap();
             cases.push((
                 format!("{base}_{s}"),
-                Box::new(move || Box::new(synthetic_3d(&spec, SimParams::default()).unwrap())),
+                Box::new(move || {
+                    Box::new(synthetic_3d(&spec, SimParams::default()).unwrap().with_bounce_reads(bounces_3d))
+                }),
                 Hidden::None,
             ));
         }
@@ -73,7 +83,8 @@ fn main() {
             let spec = case_2d(base, s).unwrap();
             let hidden = spec.hidden.clone();
             let name = if hidden == Hidden::None { format!("2d_{base}_{s}") } else { format!("2d_{base}") };
-            cases.push((name, Box::new(move || Box::new(synthetic_2d(&spec, Options2d::default()).unwrap())), hidden));
+            let make = move || synthetic_2d(&spec, Options2d::default()).unwrap().with_bounce_reads(bounces);
+            cases.push((name, Box::new(move || Box::new(make())), hidden));
         }
     }
     for (name, make, hidden) in cases {
@@ -82,10 +93,6 @@ fn main() {
         }
         let t = Instant::now();
         let model = make();
-        let cfg = match std::env::var("STUDY_CONFIG") {
-            Ok(p) => CalibrationConfig::read(std::path::Path::new(&p)).unwrap(),
-            Err(_) => CalibrationConfig::default(),
-        };
         let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
         let log = |m: &str| eprintln!("[{name} {:6.1} s] {m}", t.elapsed().as_secs_f64());
         let c = calibrate::calibrate(model.as_ref(), &cfg, &cal, &hold, "seeded split", Some(&out.join(&name)), &log)

@@ -1134,3 +1134,43 @@ fn the_final_evaluation_reports_the_models_the_loop_diagnosed_as_if_simulated_af
     assert_eq!(full.diagnostics_final, one.diagnostics_final);
     assert_eq!(bounces(&full, true), bounces(&one, true));
 }
+
+#[test]
+fn reading_the_simulated_bounces_leaves_the_simulations_as_they_were() {
+    // The bounce score reads each simulated path of a tracked run as its track was; recording the path for that
+    // must not change the path: the same run-outs, rest points and rebound heights with and without the reading,
+    // and the tracked runs' simulations then carry their bounces' tangential restitutions (2DLM by default, 3DRB
+    // when asked for).
+    let spec3 = talus::calibrate::synthetic::case_3d("speed_tracked", 1).unwrap();
+    let model3 = synthetic_3d(&spec3, SimParams::default()).unwrap();
+    assert!(!model3.reads_bounces(), "3DRB reads its bounces only when asked");
+    let read3 = model3.clone().with_bounce_reads(true);
+    assert!(read3.reads_bounces());
+    let truth3 = talus::calibrate::synthetic::truth_3d(&spec3);
+    let spec2 = case_2d("speed_tracked", 1).unwrap();
+    let model2 = shipped_tracked_profile(&CalibrationConfig::default());
+    assert!(model2.reads_bounces(), "2DLM reads them where a track shows one");
+    let plain2 = shipped_tracked_profile(&CalibrationConfig { bounce_weight: Some(0.0), ..Default::default() });
+    assert!(!plain2.reads_bounces());
+    let pairs: [(&dyn Model, &dyn Model, talus::calibrate::params::Candidate); 2] =
+        [(&model3, &read3, truth3), (&plain2, &model2, truth_2d(&spec2))];
+    for (plain, read, truth) in pairs {
+        let which: Vec<usize> =
+            (0..plain.runs().len()).filter(|&i| plain.runs()[i].has_tangential_bounce()).take(6).collect();
+        assert_eq!(which.len(), 6);
+        let (a, b) =
+            (evaluate(plain, &truth, &which, 3, 1, 0).unwrap(), evaluate(read, &truth, &which, 3, 1, 0).unwrap());
+        let mut bounces = 0;
+        for (x, y) in a.iter().zip(&b) {
+            for (s, t) in x.sims.iter().zip(&y.sims) {
+                assert_eq!(
+                    (s.runout_m, s.rest_m, s.summary.rebound_height_m),
+                    (t.runout_m, t.rest_m, t.summary.rebound_height_m)
+                );
+                assert!(s.summary.tangential_restitutions.is_empty());
+                bounces += t.summary.tangential_restitutions.len();
+            }
+        }
+        assert!(bounces > 0, "no simulated bounce read");
+    }
+}

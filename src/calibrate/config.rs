@@ -336,10 +336,10 @@ pub struct CalibrationConfig {
     /// ([`super::objective::score`]); default: the ratio of the observed spreads on the calibration runs
     /// ([`super::objective::default_rebound_weight`]), 0 without tracked paths.
     pub rebound_weight: Option<f64>,
-    /// Metres of run-out one unit of tangential restitution counts for in the score of a tracked 2DLM run (its
-    /// bounces' mean CRPS) ([`super::objective::bounce_crps`]); default: the ratio of the observed spreads on the
-    /// calibration runs ([`super::objective::default_bounce_weight`]) where the model reads its simulated bounces
-    /// (2DLM) and the tracks show at least 20 bounces with a tangential restitution, else 0.
+    /// Metres of run-out one unit of tangential restitution counts for in the score of a tracked run (its
+    /// bounces' mean CRPS) ([`super::objective::bounce_crps`]); default: in 2DLM the ratio of the observed spreads
+    /// on the calibration runs ([`super::objective::default_bounce_weight`]) where the tracks show at least 20
+    /// bounces with a tangential restitution, else 0; in 3DRB 0 (a weight given makes the model read its bounces).
     pub bounce_weight: Option<f64>,
     /// Standard deviation of the tracking system's error on a tracked point's height, m. When set, every simulated
     /// path of a tracked run is measured as its track was: at the track's times (since its first point, taken as

@@ -141,13 +141,16 @@ pub fn calibrate(
     if cfg.rebound_weight.is_none() {
         cfg.rebound_weight = objective::default_rebound_weight(model.runs(), cal);
     }
+    let spreads = objective::default_bounce_weight(model.runs(), cal);
     if !model.reads_bounces() {
-        if cfg.bounce_weight.is_some_and(|w| w > 0.0) {
-            log("note: bounce_weight is set but this model does not read its simulated bounces (2DLM on tracked runs only): it is unused");
+        match (cfg.bounce_weight, spreads) {
+            (Some(w), _) if w > 0.0 => log("note: bounce_weight is set but this model does not read its simulated bounces (no run's track shows a bounce with a tangential restitution, or a model built without them): it is unused"),
+            (None, Some(w)) if model.kind() == ModelKind::Rigid3d => log(&format!("3DRB: the tracked bounces are not in the score by default; bounce_weight = {w:.1} (the ratio of the observed spreads) puts them there")),
+            _ => {}
         }
         cfg.bounce_weight = Some(0.0);
     } else if cfg.bounce_weight.is_none() {
-        cfg.bounce_weight = objective::default_bounce_weight(model.runs(), cal);
+        cfg.bounce_weight = spreads;
     }
     let measured = measured::from_tracks(&mut cfg, model, cal);
     for m in &measured {

@@ -35,7 +35,7 @@ pub struct Model2d {
     rebounds: bool,
     /// Read the bounces of each simulated path of a run whose track shows bounces with a tangential restitution,
     /// for the bounce score (on where a run has such bounces, unless the settings give `bounce_weight = 0`; it
-    /// about doubles the cost of those runs' simulations).
+    /// about doubles the cost of those runs' simulations: [`Model2d::with_bounce_reads`]).
     bounce_reads: bool,
     /// The tracking error's sd, m, when simulated paths are read as the tracks were (`track_noise_m`).
     track_noise_m: Option<f64>,
@@ -56,9 +56,7 @@ impl Model2d {
         let mut model = Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
             .with_release_attempts(cfg.release_attempts);
         model.files = Some((campaign.dir.clone(), profile_file.to_path_buf()));
-        let mut model = model.with_tracks(&campaign.tracks, cfg.track_noise_m)?;
-        model.bounce_reads &= cfg.bounce_weight != Some(0.0);
-        Ok(model)
+        Ok(model.with_tracks(&campaign.tracks, cfg.track_noise_m)?.with_bounce_reads(cfg.bounce_weight != Some(0.0)))
     }
 
     /// A model from a profile and options. For synthetic studies and tests.
@@ -107,6 +105,13 @@ impl Model2d {
         self
     }
 
+    /// The model reading the bounces of the simulated paths of runs whose tracks show bounces with a tangential
+    /// restitution, for the bounce score, or not (by default: if a run's track shows one).
+    pub fn with_bounce_reads(mut self, on: bool) -> Model2d {
+        self.bounce_reads = on && self.runs.iter().any(FieldRun::has_tangential_bounce);
+        self
+    }
+
     /// The model with the tracked paths `tracks` (by run id, `x_m` along the profile) attached: each tracked run gets
     /// its observed rebound, above the same profile as the simulated ones, and its track times; with
     /// `track_noise_m` declared, simulated paths are read as the tracks were ([`ReboundMeter`]).
@@ -127,8 +132,7 @@ impl Model2d {
             |q| profile.z_at(q.position_m[0]).map_or(f64::NAN, |z| q.position_m[2] - z),
             |track, noise_m| profile_impacts(profile, track, noise_m),
         )?;
-        self.bounce_reads = self.runs.iter().any(has_tangential_bounce);
-        Ok(self)
+        Ok(self.with_bounce_reads(true))
     }
 
     /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model2d::from_parts`]).
@@ -367,7 +371,7 @@ impl Prepared for Prepared2d<'_> {
             summary.impact_angle_mean_deg /= summary.impacts as f64;
         }
         summary.end_slope_deg = slope_at(profile, r.end_x_m).0;
-        if self.model.bounce_reads && has_tangential_bounce(run) {
+        if self.model.bounce_reads && run.has_tangential_bounce() {
             let path = Model2d::track(&self.slope, &self.options, run, repeat, seed);
             let read = read_as_tracked(self.model, run, repeat, seed, &path, self.model.track_noise_m);
             summary.tangential_restitutions = read.iter().filter_map(|i| i.tangential_restitution).collect();
@@ -442,11 +446,6 @@ impl Model2d {
         }
         track
     }
-}
-
-/// True if the track of `run` shows a bounce with a tangential restitution.
-fn has_tangential_bounce(run: &FieldRun) -> bool {
-    run.impacts.iter().any(|i| i.tangential_restitution.is_some())
 }
 
 /// The bounces of `track` (x along `profile`, z up) over the profile ([`read_impacts`]).

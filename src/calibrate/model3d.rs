@@ -4,7 +4,7 @@
 
 use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
-use super::impacts::read_impacts;
+use super::impacts::{read_as_tracked, read_impacts};
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
 use super::rebound::{attach_tracks, rebound_meter, ReboundMeter};
@@ -37,6 +37,10 @@ pub struct Model3d {
     release_attempts: usize,
     /// Measure each simulated path's rebound height (only a tracked run needs it).
     rebounds: bool,
+    /// Read the bounces of each simulated path of a run whose track shows bounces with a tangential restitution,
+    /// for the bounce score (off unless asked for: [`Model3d::with_bounce_reads`]; it records every such
+    /// simulation's path every millisecond).
+    bounce_reads: bool,
     /// The tracking error's sd, m, when simulated paths are read as the tracks were (`track_noise_m`).
     track_noise_m: Option<f64>,
     /// The campaign folder and the terrain as read, for [`Model::scenario_toml`] (`None` when built from parts).
@@ -111,7 +115,17 @@ impl Model3d {
         let mut model = Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)?
             .with_release_attempts(cfg.release_attempts);
         model.files = Some((campaign.dir.clone(), spec));
-        model.with_tracks(&campaign.tracks, cfg.track_noise_m)
+        Ok(model
+            .with_tracks(&campaign.tracks, cfg.track_noise_m)?
+            .with_bounce_reads(cfg.bounce_weight.is_some_and(|w| w > 0.0)))
+    }
+
+    /// The model reading the bounces of the simulated paths of runs whose tracks show bounces with a tangential
+    /// restitution, for the bounce score, or not (the default: a 3DRB model scores its bounces only where the
+    /// settings give `bounce_weight`).
+    pub fn with_bounce_reads(mut self, on: bool) -> Model3d {
+        self.bounce_reads = on && self.runs.iter().any(FieldRun::has_tangential_bounce);
+        self
     }
 
     /// A model from a terrain already built (its materials name the calibrated materials), rock bodies by block
@@ -157,6 +171,7 @@ impl Model3d {
             median_mass_kg,
             release_attempts: 1,
             rebounds,
+            bounce_reads: false,
             track_noise_m: None,
             files: None,
         })
@@ -303,6 +318,10 @@ impl Model for Model3d {
 
     fn track_noise_m(&self) -> Option<f64> {
         self.track_noise_m
+    }
+
+    fn reads_bounces(&self) -> bool {
+        self.bounce_reads
     }
 
     fn read_impacts(&self, track: &[TrackPoint], noise_m: f64) -> Vec<super::impacts::Impact> {
@@ -499,7 +518,14 @@ impl Observer for PathRecorder3d<'_> {
 
 impl Prepared for Prepared3d<'_> {
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
-        self.simulate_observed(run, repeat, seed, &mut ())
+        if !(self.model.bounce_reads && run.has_tangential_bounce()) {
+            return self.simulate_observed(run, repeat, seed, &mut ());
+        }
+        let mut rec = PathRecorder3d::new(&self.terrain);
+        let mut sim = self.simulate_observed(run, repeat, seed, &mut rec);
+        let read = read_as_tracked(self.model, run, repeat, seed, &rec.points, self.model.track_noise_m);
+        sim.summary.tangential_restitutions = read.iter().filter_map(|i| i.tangential_restitution).collect();
+        sim
     }
 
     fn path(&self, run: &FieldRun, repeat: usize, seed: u64) -> Vec<TrackPoint> {

@@ -51,6 +51,12 @@ pub struct FieldRun {
 }
 
 impl FieldRun {
+    /// True if the run's track shows a bounce with a tangential restitution (the bounce score's,
+    /// [`super::objective::bounce_crps`]).
+    pub fn has_tangential_bounce(&self) -> bool {
+        self.impacts.iter().any(|i| i.tangential_restitution.is_some())
+    }
+
     /// True if the field rock left its release: it ran farther than [`NOT_STARTED_M`].
     pub fn ran(&self) -> bool {
         self.runout_m > NOT_STARTED_M
