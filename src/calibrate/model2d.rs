@@ -34,8 +34,8 @@ pub struct Model2d {
     /// a third slower).
     rebounds: bool,
     /// Read the bounces of each simulated path of a run whose track shows bounces with a tangential restitution,
-    /// for the bounce score (on where a run has such bounces, unless the settings give `bounce_weight = 0`; it
-    /// about doubles the cost of those runs' simulations: [`Model2d::with_bounce_reads`]).
+    /// for the bounce score (on where a run has such bounces, unless the settings give `bounce_weight = 0`:
+    /// [`Model2d::with_bounce_reads`]; the path is recorded during the simulation).
     bounce_reads: bool,
     /// The tracking error's sd, m, when simulated paths are read as the tracks were (`track_noise_m`).
     track_noise_m: Option<f64>,
@@ -354,7 +354,8 @@ impl Prepared for Prepared2d<'_> {
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
         let profile = self.slope.profile();
         let meter = self.model.rebounds.then(|| rebound_meter(self.model.track_noise_m, run, repeat, seed));
-        let mut obs = PathObserver2d::new(profile, meter);
+        let read_bounces = self.model.bounce_reads && run.has_tangential_bounce();
+        let mut obs = PathObserver2d::new(profile, meter, read_bounces);
         let r = simulate_run(&self.slope, &self.options, run, repeat, seed, &mut obs);
         let mut summary = obs.summary;
         summary.rebound_height_m = obs.rebound.map_or(0.0, ReboundMeter::finish);
@@ -371,9 +372,8 @@ impl Prepared for Prepared2d<'_> {
             summary.impact_angle_mean_deg /= summary.impacts as f64;
         }
         summary.end_slope_deg = slope_at(profile, r.end_x_m).0;
-        if self.model.bounce_reads && run.has_tangential_bounce() {
-            let path = Model2d::track(&self.slope, &self.options, run, repeat, seed);
-            let read = read_as_tracked(self.model, run, repeat, seed, &path, self.model.track_noise_m);
+        if let Some(rec) = &obs.recorder {
+            let read = read_as_tracked(self.model, run, repeat, seed, &track_of(rec), self.model.track_noise_m);
             summary.tangential_restitutions = read.iter().filter_map(|i| i.tangential_restitution).collect();
         }
         // Zones add materials after the declared ones; fold them into the fraction vector as they are.
@@ -426,26 +426,31 @@ impl Model2d {
     fn track(slope: &Slope2d, options: &Options2d, run: &FieldRun, repeat: usize, seed: u64) -> Vec<TrackPoint> {
         let mut rec = PathRecorder::default();
         simulate_run(slope, options, run, repeat, seed, &mut rec);
-        let mut track: Vec<TrackPoint> = Vec::new();
-        for piece in &rec.pieces {
-            let samples: Vec<(f64, [f64; 2])> = match piece {
-                PathPiece::Flight(f) => {
-                    let steps = (f.duration_s / 0.05).ceil().max(1.0) as usize;
-                    let dt_s = |i: usize| f.duration_s * i as f64 / steps as f64;
-                    (0..=steps).map(|i| (f.t0_s + dt_s(i), f.position_at(dt_s(i)))).collect()
-                }
-                PathPiece::Slide(s) => vec![(s.t0_s, s.position_at(0.0)), (s.t0_s + s.duration_s, s.end_position())],
-                PathPiece::Impact(_) => Vec::new(),
-            };
-            // Pieces meet end to start: keep the time strictly increasing.
-            for (time_s, [x, z]) in samples {
-                if track.last().is_none_or(|q| time_s > q.time_s) {
-                    track.push(TrackPoint { time_s, position_m: [x, 0.0, z] });
-                }
+        track_of(&rec)
+    }
+}
+
+/// The recorded path as a track: the centre every 0.05 s of each flight and at both ends of each slide.
+fn track_of(rec: &PathRecorder) -> Vec<TrackPoint> {
+    let mut track: Vec<TrackPoint> = Vec::new();
+    for piece in &rec.pieces {
+        let samples: Vec<(f64, [f64; 2])> = match piece {
+            PathPiece::Flight(f) => {
+                let steps = (f.duration_s / 0.05).ceil().max(1.0) as usize;
+                let dt_s = |i: usize| f.duration_s * i as f64 / steps as f64;
+                (0..=steps).map(|i| (f.t0_s + dt_s(i), f.position_at(dt_s(i)))).collect()
+            }
+            PathPiece::Slide(s) => vec![(s.t0_s, s.position_at(0.0)), (s.t0_s + s.duration_s, s.end_position())],
+            PathPiece::Impact(_) => Vec::new(),
+        };
+        // Pieces meet end to start: keep the time strictly increasing.
+        for (time_s, [x, z]) in samples {
+            if track.last().is_none_or(|q| time_s > q.time_s) {
+                track.push(TrackPoint { time_s, position_m: [x, 0.0, z] });
             }
         }
-        track
     }
+    track
 }
 
 /// The bounces of `track` (x along `profile`, z up) over the profile ([`read_impacts`]).
@@ -468,13 +473,16 @@ struct PathObserver2d<'a> {
     thinner: PathThinner,
     /// The rebound height so far, if measured.
     rebound: Option<ReboundMeter<'a>>,
+    /// The path's pieces, if its bounces are read.
+    recorder: Option<PathRecorder>,
 }
 
 impl<'a> PathObserver2d<'a> {
-    fn new(profile: &'a Profile, rebound: Option<ReboundMeter<'a>>) -> Self {
+    fn new(profile: &'a Profile, rebound: Option<ReboundMeter<'a>>, record: bool) -> Self {
         let summary =
             PathSummary { material_fraction: vec![0.0; profile.material_names().len()], ..Default::default() };
-        PathObserver2d { profile, summary, thinner: PathThinner::default(), rebound }
+        let recorder = record.then(PathRecorder::default);
+        PathObserver2d { profile, summary, thinner: PathThinner::default(), rebound, recorder }
     }
 
     /// Adds a horizontal stretch [x0, x1] of the path.
@@ -509,6 +517,9 @@ impl<'a> PathObserver2d<'a> {
 
 impl PathObserver for PathObserver2d<'_> {
     fn flight(&mut self, piece: &FlightPiece) {
+        if let Some(r) = &mut self.recorder {
+            r.flight(piece);
+        }
         let e = piece.end_position();
         self.stretch(piece.x0_m, e[0]);
         // The flight every 0.05 s and at its end (its apex is missed by at most g·0.025²/2 ≈ 3 mm).
@@ -523,6 +534,9 @@ impl PathObserver for PathObserver2d<'_> {
     }
 
     fn slide(&mut self, piece: &SlidePiece) {
+        if let Some(r) = &mut self.recorder {
+            r.slide(piece);
+        }
         let e = piece.end_position();
         self.stretch(piece.x0_m, e[0]);
         if let Some(rebound) = &mut self.rebound {
@@ -532,6 +546,9 @@ impl PathObserver for PathObserver2d<'_> {
     }
 
     fn impact(&mut self, ev: &ImpactEvent) {
+        if let Some(r) = &mut self.recorder {
+            r.impact(ev);
+        }
         let p = self.profile;
         let k = ev.segment.min(p.n_segments().saturating_sub(1));
         let (a, b) = (p.vertex(k), p.vertex(k + 1));
