@@ -32,7 +32,7 @@
 //! **"Clearly improves"** (ours): the out-of-fold mean CRPS falls by at least `min_improvement` (5 %) and a
 //! one-sided paired sign-flip permutation test on the per-run CRPS differences gives p ≤ `alpha` (0.05). Among
 //! the effects that pass, the one with the fewest added parameters whose out-of-fold CRPS is within one standard
-//! error of the best one's is kept (the one-standard-error rule, [`choose`]; `one_se_rule = false`: the largest
+//! error of the best one's is kept (the one-standard-error rule, `choose`; `one_se_rule = false`: the largest
 //! cut), then refitted with the optimiser (together with the base parameters), and the loop starts again.
 
 use super::config::{CalibrationConfig, ModelKind, ParamSetting};
