@@ -13,11 +13,12 @@
 //! tell an effect that kills the bounce of fast impacts from a lower restitution everywhere; the rebound heights
 //! can (docs/calibration.md).
 //!
-//! **Tracked bounces** (ours, 2DLM): a tracked run whose track shows bounces with a tangential restitution adds
-//! `bounce_weight` times the mean over them of the CRPS of the tangential restitutions of the run's simulated
-//! bounces, read as the track was, against each ([`bounce_crps`]); the default weight is again the ratio of the observed spreads
-//! ([`default_bounce_weight`]). In the lumped-mass model that ratio is Rt: run-outs alone trade Rt against the
-//! friction angle, the bounces do not (docs/calibration.md, "Bounces in the score").
+//! **Tracked bounces** (ours; 2DLM by default, 3DRB on request): a tracked run whose track shows bounces with a
+//! tangential restitution adds `bounce_weight` times the mean over them of the CRPS of the tangential restitutions
+//! of the run's simulated bounces, read as the track was, against each ([`bounce_crps`]); the default weight is
+//! again the ratio of the observed spreads ([`default_bounce_weight`]). In the lumped-mass model that ratio is Rt:
+//! run-outs alone trade Rt against the friction angle, the bounces do not (docs/calibration.md, "Bounces in the
+//! score").
 
 use super::config::{CalibrationConfig, Objective};
 use super::metrics::crps;
@@ -81,8 +82,7 @@ pub fn bounce_crps(run: &FieldRun, s: &RunSims) -> Option<f64> {
 
 /// The default bounce weight on calibration runs `which`: the mean absolute deviation from the median of their
 /// observed run-outs over that of the tangential restitutions of their tracks' bounces (as for rebound heights);
-/// `None` with fewer than
-/// [`super::measured::MIN_BOUNCES_MEASURED`] such bounces or no spread.
+/// `None` with fewer than [`super::measured::MIN_BOUNCES_MEASURED`] such bounces or no spread.
 pub fn default_bounce_weight(runs: &[FieldRun], which: &[usize]) -> Option<f64> {
     let et: Vec<f64> = which.iter().flat_map(|&i| &runs[i].impacts).filter_map(|i| i.tangential_restitution).collect();
     let all: Vec<f64> = which.iter().map(|&i| runs[i].runout_m).collect();

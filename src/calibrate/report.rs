@@ -621,7 +621,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             let scored = if weight > 0.0 {
                 format!("In the score the mean tangential-restitution CRPS of a tracked run's observed bounces against its simulated ones counts {} m of run-out (`bounce_weight`; docs/calibration.md, \"Bounces in the score\").\n", fmt(weight))
             } else {
-                "Not in the score (`bounce_weight` 0: the default in 3DRB; in 2DLM fewer than 20 bounces with a tangential restitution, or set so).\n".to_string()
+                "The bounces are not in the score (`bounce_weight` 0: the default in 3DRB; in 2DLM fewer than 20 bounces with a tangential restitution, or set so).\n".to_string()
             };
             let _ = writeln!(s, "{scored}");
             let _ = writeln!(s, "| paths | bounces per path | normal restitution, median (quartiles) | tangential, median | normal impact speed, median m/s |");
