@@ -434,6 +434,20 @@ pub fn read_as_tracked(
     }
 }
 
+/// The tangential restitutions of the bounces of `path`, the simulated path of repeat `repeat` of the tracked `run`
+/// with `seed`, read as the run's track was under the model's declared tracking noise ([`read_as_tracked`]): what
+/// the bounce score compares ([`super::objective::bounce_crps`]).
+pub fn tangential_restitutions_as_tracked(
+    model: &dyn Model,
+    run: &FieldRun,
+    repeat: usize,
+    seed: u64,
+    path: &[TrackPoint],
+) -> Vec<f64> {
+    let read = read_as_tracked(model, run, repeat, seed, path, model.track_noise_m());
+    read.iter().filter_map(|i| i.tangential_restitution).collect()
+}
+
 /// The summary of [`simulated_impacts`]'s bounces, `repeats` paths per run.
 pub fn simulated_summary(simulated: &[(usize, Vec<Impact>)], repeats: usize) -> Option<ImpactSummary> {
     let impacts: Vec<&Impact> = simulated.iter().flat_map(|(_, i)| i).collect();

@@ -37,7 +37,7 @@ pub struct PathSummary {
     /// Share of the horizontal path over each material of the model (declared materials first, then zones).
     pub material_fraction: Vec<f64>,
     /// The tangential restitutions of the bounces read from the path as its run's track was
-    /// ([`super::impacts::read_as_tracked`]), for the bounce score ([`super::objective::bounce_crps`]); empty where
+    /// ([`super::impacts::tangential_restitutions_as_tracked`]), for the bounce score ([`super::objective::bounce_crps`]); empty where
     /// the model does not read them (untracked runs, a 3DRB model not asked to: [`Model::reads_bounces`]).
     pub tangential_restitutions: Vec<f64>,
 }

@@ -4,7 +4,7 @@
 
 use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
-use super::impacts::{read_as_tracked, read_impacts, Impact};
+use super::impacts::{read_impacts, tangential_restitutions_as_tracked, Impact};
 use super::measured::{Measured, MIN_BOUNCES_MEASURED};
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
@@ -373,8 +373,8 @@ impl Prepared for Prepared2d<'_> {
         }
         summary.end_slope_deg = slope_at(profile, r.end_x_m).0;
         if let Some(rec) = &obs.recorder {
-            let read = read_as_tracked(self.model, run, repeat, seed, &track_of(rec), self.model.track_noise_m);
-            summary.tangential_restitutions = read.iter().filter_map(|i| i.tangential_restitution).collect();
+            summary.tangential_restitutions =
+                tangential_restitutions_as_tracked(self.model, run, repeat, seed, &track_of(rec));
         }
         // Zones add materials after the declared ones; fold them into the fraction vector as they are.
         let path = obs.thinner.finish(r.end_x_m, 0.0);

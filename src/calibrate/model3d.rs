@@ -4,7 +4,7 @@
 
 use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
-use super::impacts::{read_as_tracked, read_impacts};
+use super::impacts::{read_impacts, tangential_restitutions_as_tracked};
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
 use super::rebound::{attach_tracks, rebound_meter, ReboundMeter};
@@ -523,8 +523,8 @@ impl Prepared for Prepared3d<'_> {
         }
         let mut rec = PathRecorder3d::new(&self.terrain);
         let mut sim = self.simulate_observed(run, repeat, seed, &mut rec);
-        let read = read_as_tracked(self.model, run, repeat, seed, &rec.points, self.model.track_noise_m);
-        sim.summary.tangential_restitutions = read.iter().filter_map(|i| i.tangential_restitution).collect();
+        sim.summary.tangential_restitutions =
+            tangential_restitutions_as_tracked(self.model, run, repeat, seed, &rec.points);
         sim
     }
 
