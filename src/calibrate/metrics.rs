@@ -16,11 +16,21 @@
 //! mean_i |obs_i − median of the observed run-outs of i's release group|, the median taken over all observed runs
 //! of the group in the campaign (ours: a held-out set holds too few runs per group for its own median; the floor
 //! is only a yardstick and chooses nothing).
+//!
+//! **Were the model right** (`runout_w1_if_right_m`, `coverage_90_if_right`, ours): a few dozen field runs are a
+//! small sample, so even the true model shows a W1 above zero against them; and a 5–95 % interval read from R
+//! simulations holds a further draw less often than 90 % of the time (about 0.9 (R − 1)/(R + 1): 0.81 for R = 20).
+//! The yardsticks are the values the same runs would show were their field run-outs draws of the model itself: in
+//! draw d (d = 0..R) run i's observed run-out is replaced by its simulation (d + i) mod R and compared with the
+//! other R − 1 simulations (of every run for W1, of its own for coverage); the mean over the R draws (a parametric
+//! bootstrap that needs no further simulation). A `runout_w1_m` well above its yardstick is misfit, one near it is
+//! what the number of runs allows; a coverage above its yardstick means simulated ranges wider than the field's.
+//! They choose nothing.
 
 use super::model::RunSims;
 use super::objective::rebound_crps;
 use super::runs::FieldRun;
-use super::stats::{mean, median, wasserstein1};
+use super::stats::{mean, median, quantile_sorted, sorted, wasserstein1};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -39,6 +49,10 @@ pub struct Metrics {
     pub runout_bias_m: f64,
     /// The scatter floor of `runout_mae_m`, m.
     pub scatter_floor_mae_m: f64,
+    /// The mean `runout_w1_m` these runs would show were their field run-outs draws of the model itself, m.
+    pub runout_w1_if_right_m: f64,
+    /// The mean `coverage_90` these runs would show were their field run-outs draws of the model itself.
+    pub coverage_90_if_right: f64,
     /// Runs measured.
     pub runs: usize,
     /// Simulations per run.
@@ -97,6 +111,7 @@ pub fn metrics(runs: &[FieldRun], sims: &[RunSims]) -> Metrics {
         not_stopped += s.sims.iter().filter(|x| !x.stopped).count();
     }
     let which: Vec<usize> = sims.iter().map(|s| s.run).collect();
+    let if_right = were_the_model_right(sims);
     let tracked: Vec<&RunSims> = sims.iter().filter(|s| runs[s.run].rebound_height_m.is_some()).collect();
     let over_tracked = |f: &dyn Fn(&RunSims) -> f64| {
         (!tracked.is_empty()).then(|| mean(&tracked.iter().map(|s| f(s)).collect::<Vec<_>>()))
@@ -112,6 +127,8 @@ pub fn metrics(runs: &[FieldRun], sims: &[RunSims]) -> Metrics {
         coverage_90: if n > 0 { covered as f64 / n as f64 } else { f64::NAN },
         runout_bias_m: mean(&all) - mean(&obs),
         scatter_floor_mae_m: scatter_floor(runs, &which),
+        runout_w1_if_right_m: if_right[0],
+        coverage_90_if_right: if_right[1],
         runs: n,
         repeats: sims.first().map(|s| s.sims.len()).unwrap_or(0),
         observed_mean_m: mean(&obs),
@@ -141,6 +158,32 @@ pub fn scatter_floor(runs: &[FieldRun], which: &[usize]) -> f64 {
     }
     let med: BTreeMap<usize, f64> = groups.iter().map(|(g, v)| (*g, median(v))).collect();
     mean(&which.iter().map(|&i| (runs[i].runout_m - med[&runs[i].group]).abs()).collect::<Vec<_>>())
+}
+
+/// [W1, coverage_90] were the model right: one simulation per run stands in for the field run (in draw d run i's
+/// simulation (d + i) mod R) against the other simulations, the mean over R draws (R the fewest simulations of a
+/// run; NaN below 2). See the module's "Were the model right".
+pub fn were_the_model_right(sims: &[RunSims]) -> [f64; 2] {
+    let r = sims.iter().map(|s| s.sims.len()).min().unwrap_or(0);
+    if r < 2 {
+        return [f64::NAN; 2];
+    }
+    let (mut w1, mut covered) = (0.0, 0usize);
+    for d in 0..r {
+        let (mut stand_ins, mut others) = (Vec::with_capacity(sims.len()), Vec::new());
+        for (i, s) in sims.iter().enumerate() {
+            let pick = (d + i) % s.sims.len();
+            let stand_in = s.sims[pick].runout_m;
+            let own: Vec<f64> =
+                s.sims.iter().enumerate().filter(|&(j, _)| j != pick).map(|(_, x)| x.runout_m).collect();
+            let own = sorted(&own);
+            covered += usize::from(stand_in >= quantile_sorted(&own, 0.05) && stand_in <= quantile_sorted(&own, 0.95));
+            stand_ins.push(stand_in);
+            others.extend(own);
+        }
+        w1 += wasserstein1(&stand_ins, &others);
+    }
+    [w1 / r as f64, covered as f64 / (r * sims.len()) as f64]
 }
 
 /// The continuous ranked probability score of a simulated run-out sample against the observed run-out, m (the
@@ -266,8 +309,47 @@ pub(crate) mod tests {
         // CRPS: a point forecast reduces to the absolute error; a sample's own spread is credited.
         assert!((crps(&[3.0, 3.0], 5.0) - 2.0).abs() < 1e-12);
         assert!((crps(&[0.0, 2.0], 1.0) - 0.0).abs() < 1e-12);
+        // W1 were the model right: the stand-ins (9, 11, 32), (11, 12, 30), (12, 9, 31) against each run's other
+        // two simulations give W1 7/6, 4/3 and 5/6 (by hand, from the two step functions); the field runs play no part.
+        assert!((m.runout_w1_if_right_m - 10.0 / 9.0).abs() < 1e-12, "{m:?}");
+        // Coverage: each stand-in against the 5-95 % of its run's other two; 11 in [9.15, 11.85] (run 0, and run 1
+        // in its first draw) and 31 in [30.1, 31.9] are inside, the other six outside.
+        assert!((m.coverage_90_if_right - 1.0 / 3.0).abs() < 1e-12, "{m:?}");
         let set = metrics_set(&runs, &s);
         assert_eq!(set.by_block.len(), 2);
         assert!((set.by_block["b1"].runout_mae_m - 11.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn field_runs_drawn_from_the_model_show_the_w1_the_model_expects_and_shifted_ones_do_not() {
+        use crate::random::{standard_normal, stream};
+        // 30 runs, each simulated 20 times as N(100 + 2 i, 15²) m, and field runs drawn once from the same
+        // distributions; then the field runs moved 20 m. Over seeds 1..=20 (over 200 seeds: W1 / W1-if-right
+        // 0.99 on average, at most 1.99; moved, at least 2.45; coverage 0.817 on average, if right 0.815, from
+        // 0.805 to 0.828, where 0.9 (R - 1)/(R + 1) = 0.814).
+        let (n, r) = (30, 20);
+        let (mut ratios, mut coverage, mut coverage_if_right) = (Vec::new(), Vec::new(), Vec::new());
+        for seed in 1..=20 {
+            let mut rng = stream(seed, 0);
+            let mut draw = |i: usize| 100.0 + 2.0 * i as f64 + 15.0 * standard_normal(&mut rng);
+            let s: Vec<RunSims> = (0..n).map(|i| sims(i, &(0..r).map(|_| draw(i)).collect::<Vec<_>>())).collect();
+            let same: Vec<FieldRun> = (0..n).map(|i| run(i, i, draw(i))).collect();
+            let m = metrics(&same, &s);
+            // 30 draws of sd ≈ 15-23 m are a small sample: even the true model shows a W1 of a few metres.
+            assert!((3.0..6.0).contains(&m.runout_w1_if_right_m), "{m:?}");
+            ratios.push(m.runout_w1_m / m.runout_w1_if_right_m);
+            coverage.push(m.coverage_90);
+            coverage_if_right.push(m.coverage_90_if_right);
+            let moved: Vec<FieldRun> = same.iter().map(|f| run(f.index, f.group, f.runout_m + 20.0)).collect();
+            let shifted = metrics(&moved, &s);
+            assert_eq!(shifted.runout_w1_if_right_m, m.runout_w1_if_right_m);
+            assert!(shifted.runout_w1_m > 2.3 * m.runout_w1_if_right_m, "{shifted:?}");
+        }
+        let mean_ratio = mean(&ratios);
+        assert!((0.85..1.15).contains(&mean_ratio), "{ratios:?}");
+        assert!(ratios.iter().all(|&x| x < 2.2), "{ratios:?}");
+        // A 5-95 % interval of 20 simulations holds about 81 % of further draws, not 90 %.
+        assert!(coverage_if_right.iter().all(|c| (0.79..0.84).contains(c)), "{coverage_if_right:?}");
+        assert!((mean(&coverage) - mean(&coverage_if_right)).abs() < 0.04, "{coverage:?}");
     }
 }

@@ -4,6 +4,7 @@ use anyhow::Context;
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
+use talus::calibrate::metrics::Metrics;
 use talus::calibrate::{self, split, CalibrationConfig, ModelKind};
 
 /// Calibrate a model on a field campaign, measure it on held-out runs, and add the effects it lacks.
@@ -116,7 +117,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         let cv = calibrate::cross_validate(model.as_ref(), &cfg, k, &a.out, &log)?;
         let (b, f) = (&cv.baseline.overall, &cv.final_set.overall);
         println!("outer {k}-fold cross-validation over {} runs in {:.0} s", b.runs, cv.total_s);
-        println!("held-out runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m, runout_w1_m {:.2} -> {:.2} m, coverage_90 {:.2} -> {:.2}", b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, b.runout_w1_m, f.runout_w1_m, b.coverage_90, f.coverage_90);
+        print_errors("held-out", b, f);
         println!("wrote {}", a.out.join("cv_report.md").display());
         return Ok(());
     }
@@ -178,7 +179,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     } else {
         ("held-out", &r.baseline.holdout, &r.final_stage.holdout)
     };
-    println!("{set} runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m, runout_w1_m {:.2} -> {:.2} m, coverage_90 {:.2} -> {:.2}", b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, b.runout_w1_m, f.runout_w1_m, b.coverage_90, f.coverage_90);
+    print_errors(set, b, f);
     if let (Some(mb), Some(mf), Some(cb), Some(cf)) =
         (b.rebound_mae_m, f.rebound_mae_m, b.rebound_crps_m, f.rebound_crps_m)
     {
@@ -191,4 +192,12 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     };
     println!("the final model: talus {command} {} --out MAP", a.out.join(file).display());
     Ok(())
+}
+
+/// One line of `set`'s run-out errors, baseline `b` against final `f`.
+fn print_errors(set: &str, b: &Metrics, f: &Metrics) {
+    println!(
+        "{set} runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m, runout_w1_m {:.2} -> {:.2} m (if right {:.2}), coverage_90 {:.2} -> {:.2} (if right {:.2})",
+        b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, b.runout_w1_m, f.runout_w1_m, f.runout_w1_if_right_m, b.coverage_90, f.coverage_90, f.coverage_90_if_right
+    );
 }
