@@ -9,7 +9,7 @@
 //! control_a_N control_b_N control_c_N control_d_N control_e_N control_a_tracked_N control_d_tracked_N 2d_speed
 //! 2d_speed_tracked 2d_control_a_tracked_N 2d_size 2d_zone 2d_control_a_N 2d_control_b_N, N = 1..3, a trailing *
 //! matches a prefix; default: all; STUDY_SEEDS=N runs the controls on seeds 1..=N; STUDY_CONFIG=FILE reads the
-//! settings from FILE)
+//! settings from FILE, and the synthetic models read their bounces and rest points as those settings say)
 use std::time::Instant;
 use talus::calibrate::synthetic::{case_2d, case_3d, synthetic_2d, synthetic_3d, zone_overlap, Hidden};
 use talus::calibrate::{self, params::Region, split, CalibrationConfig, Model};
@@ -37,6 +37,8 @@ fn main() {
     // The synthetic models read their simulated bounces as a model read from files with these settings would.
     let bounces = cfg.bounce_weight != Some(0.0);
     let bounces_3d = cfg.bounce_weight.is_some_and(|w| w > 0.0);
+    // And read their simulated rest points with the survey error the settings declare (`rest_noise_m`).
+    let rest_noise = cfg.rest_noise_m;
     let mut cases: Vec<(String, MakeModel, Hidden)> = Vec::new();
     // The control cases' seeds: 1..=3, or 1..=STUDY_SEEDS.
     let n_seeds = std::env::var("STUDY_SEEDS").ok().and_then(|v| v.parse::<u64>().ok()).unwrap_or(3);
@@ -60,7 +62,9 @@ fn main() {
     for (label, name, seed) in effect_cases {
         let spec = case_3d(name, seed).unwrap();
         let hidden = spec.hidden.clone();
-        let make = move || synthetic_3d(&spec, SimParams::default()).unwrap().with_bounce_reads(bounces_3d);
+        let make = move || {
+            synthetic_3d(&spec, SimParams::default()).unwrap().with_bounce_reads(bounces_3d).with_rest_noise(rest_noise)
+        };
         cases.push((label, Box::new(move || Box::new(make())), hidden));
     }
     for base in
@@ -71,7 +75,12 @@ fn main() {
             cases.push((
                 format!("{base}_{s}"),
                 Box::new(move || {
-                    Box::new(synthetic_3d(&spec, SimParams::default()).unwrap().with_bounce_reads(bounces_3d))
+                    Box::new(
+                        synthetic_3d(&spec, SimParams::default())
+                            .unwrap()
+                            .with_bounce_reads(bounces_3d)
+                            .with_rest_noise(rest_noise),
+                    )
                 }),
                 Hidden::None,
             ));
@@ -83,7 +92,12 @@ fn main() {
             let spec = case_2d(base, s).unwrap();
             let hidden = spec.hidden.clone();
             let name = if hidden == Hidden::None { format!("2d_{base}_{s}") } else { format!("2d_{base}") };
-            let make = move || synthetic_2d(&spec, Options2d::default()).unwrap().with_bounce_reads(bounces);
+            let make = move || {
+                synthetic_2d(&spec, Options2d::default())
+                    .unwrap()
+                    .with_bounce_reads(bounces)
+                    .with_rest_noise(rest_noise)
+            };
             cases.push((name, Box::new(move || Box::new(make())), hidden));
         }
     }

@@ -539,6 +539,38 @@ fn the_combined_objective_is_the_mean_of_the_crps_and_the_group_w1() {
 }
 
 #[test]
+fn a_declared_survey_error_makes_the_true_models_ranges_hold_the_noisy_rest_points() {
+    // control_b's rest points carry a survey error of sd 0.5 m (`Synthetic2d::noise_m`), large beside its runs'
+    // scatter: the true model, reading its rest points as simulated, covers fewer field runs than it would cover
+    // draws of itself; read with the error declared, as many.
+    let spec = case_2d("control_b", 1).unwrap();
+    let coverage = |noise: Option<f64>| {
+        let model = synthetic_2d(&spec, Options2d::default()).unwrap().with_rest_noise(noise);
+        let all: Vec<usize> = (0..model.runs().len()).collect();
+        let s = evaluate(&model, &truth_2d(&spec), &all, 20, 1, 0).unwrap();
+        let m = metrics(model.runs(), &s);
+        (m.coverage_90, m.coverage_90_if_right, s)
+    };
+    let (plain, plain_if_right, plain_sims) = coverage(None);
+    let (read, read_if_right, read_sims) = coverage(Some(spec.noise_m));
+    assert!(plain < plain_if_right - 0.1, "{plain} {plain_if_right}");
+    assert!((read - read_if_right).abs() < 0.06, "{read} {read_if_right}");
+    // Only the rest points and run-outs move, each by a Gaussian error along the profile.
+    let moved: Vec<f64> = plain_sims
+        .iter()
+        .zip(&read_sims)
+        .flat_map(|(a, b)| {
+            a.sims.iter().zip(&b.sims).map(|(x, y)| {
+                assert_eq!((x.rest_m[1], x.rest_m[2], &x.summary), (y.rest_m[1], y.rest_m[2], &y.summary));
+                y.rest_m[0] - x.rest_m[0]
+            })
+        })
+        .collect();
+    let sd = (moved.iter().map(|d| d * d).sum::<f64>() / moved.len() as f64).sqrt();
+    assert!((sd - spec.noise_m).abs() < 0.03, "{sd}");
+}
+
+#[test]
 fn profile_loop_adds_nothing_without_a_hidden_effect() {
     for (design, seed) in [
         ("control_a", 1),

@@ -14,6 +14,7 @@
 //! outer_repeats = 1         # --kfold repeated with seeds seed, seed+1, ... (the spread of its estimate)
 //! # fold_link_m = 10.0      # --kfold spreads each release cluster of this linkage over the folds (default: groups)
 //! release_attempts = 1      # a simulated rock that stays at its release while the field rock ran is released again
+//! # rest_noise_m = 0.5      # the survey's error on each rest point coordinate: simulated rest points read with it
 //!
 //! [materials.default]       # 3DRB: a number fixes a parameter, [min, max] frees it
 //! cr_mean = [0.02, 0.8]
@@ -346,6 +347,11 @@ pub struct CalibrationConfig {
     /// the release), each height plus Gaussian noise of this sd ([`super::rebound::ReboundMeter`]); unset, every
     /// sample of the simulated path counts as it is (default; right for smoothed or exact tracks).
     pub track_noise_m: Option<f64>,
+    /// Standard deviation of the survey's error on each horizontal coordinate of an observed rest point, m. When
+    /// set, every simulated rest point is read with such an error ([`super::model::as_measured`]), so that the
+    /// simulated run-outs are a prediction of the measured ones; unset, as simulated (default; right where the
+    /// error is small beside the scatter of repeated runs).
+    pub rest_noise_m: Option<f64>,
     /// Fix each 2DLM material's `rt_mean` the settings leave unset at the tangential restitution the calibration
     /// runs' tracks measure on it ([`super::measured`]; default false: measured and reported, not used).
     pub fix_rt_from_tracks: bool,
@@ -387,6 +393,7 @@ impl Default for CalibrationConfig {
             rebound_weight: None,
             bounce_weight: None,
             track_noise_m: None,
+            rest_noise_m: None,
             fix_rt_from_tracks: false,
             max_evaluations: None,
             threads: 0,
@@ -578,6 +585,13 @@ impl CalibrationConfig {
                 f("track_noise_m"),
                 "must be a non-negative distance",
                 "use the tracking system's height error in metres, e.g. 0.1, or leave it out for exact tracks",
+            ));
+        }
+        if self.rest_noise_m.is_some_and(|w| !(w.is_finite() && w >= 0.0)) {
+            return Err(Error::invalid(
+                f("rest_noise_m"),
+                "must be a non-negative distance",
+                "use the survey's error on a rest point in metres, e.g. 0.5, or leave it out",
             ));
         }
         if self.max_evaluations.is_some_and(|n| n < 5) {
@@ -791,6 +805,8 @@ mod tests {
         assert!(CalibrationConfig::from_toml_str("start_points = 4\nscreen_points = 3\n", "c.toml").is_ok());
         let e = CalibrationConfig::from_toml_str("release_attempts = 0\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: release_attempts") && e.contains("got 0"), "{e}");
+        let e = CalibrationConfig::from_toml_str("rest_noise_m = -0.5\n", "c.toml").unwrap_err().to_string();
+        assert!(e.contains("c.toml: rest_noise_m") && e.contains("non-negative"), "{e}");
         let e = CalibrationConfig::from_toml_str("outer_repeats = 11\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: outer_repeats") && e.contains("got 11"), "{e}");
         assert_eq!((cfg.search_repeats, cfg.screen_repeats()), (4, 20));

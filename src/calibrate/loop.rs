@@ -986,7 +986,7 @@ fn sims_reusing(
     ctx.simulations.fetch_add(needed.len(), std::sync::atomic::Ordering::Relaxed);
     let fresh = crate::parallel::collect_in_order(needed.len(), ctx.cfg.threads, |k| {
         let (j, r) = needed[k];
-        super::model::simulate_released(prepared.as_ref(), &runs[cal[j]], r, ctx.cfg.seed, ctx.model.release_attempts())
+        super::model::as_measured(ctx.model, prepared.as_ref(), &runs[cal[j]], r, ctx.cfg.seed)
     });
     let mut out = reference.to_vec();
     for ((j, r), s) in needed.into_iter().zip(fresh) {

@@ -162,6 +162,11 @@ pub trait Model: Sync {
     fn track_noise_m(&self) -> Option<f64> {
         None
     }
+    /// The declared survey error of each rest point coordinate, sd in m, with which simulated rest points are read
+    /// ([`super::config::CalibrationConfig::rest_noise_m`]; [`as_measured`]).
+    fn rest_noise_m(&self) -> Option<f64> {
+        None
+    }
     /// The bounces of `track` (campaign frame) over this model's ground, read under height noise of sd `noise_m`
     /// ([`super::impacts::read_impacts`]); none where the model has no ground to read them on.
     fn read_impacts(&self, _track: &[TrackPoint], _noise_m: f64) -> Vec<super::impacts::Impact> {
@@ -218,6 +223,29 @@ pub fn simulate_released(prepared: &dyn Prepared, run: &FieldRun, repeat: usize,
     sim
 }
 
+/// Repeat `repeat` of `run` ([`simulate_released`]) read as its rest point was measured: with a declared survey
+/// error of sd σ ([`Model::rest_noise_m`]) each horizontal coordinate of the simulated rest point (x alone on a
+/// profile) gets a Gaussian error of sd σ, drawn from a stream of its own fixed by (seed, run, repeat) like the
+/// simulation's (common random numbers: every candidate is read with the same errors), and the run-out is measured
+/// from the release to that point, as the field run's was (ours: the simulated run-outs then predict measured
+/// ones, so coverage, CRPS and W1 compare like with like). A stall is judged on the simulation before the error
+/// ([`Sim::stalled`] on the plain simulation, for the releases); reports that count stalls see the measured value.
+pub fn as_measured(model: &dyn Model, prepared: &dyn Prepared, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
+    let mut sim = simulate_released(prepared, run, repeat, seed, model.release_attempts());
+    if let Some(sd) = model.rest_noise_m().filter(|&sd| sd > 0.0) {
+        let mut rng = crate::random::stream(seed ^ REST_NOISE_SEED, stream_index(run.index, repeat));
+        let dx = sd * crate::random::standard_normal(&mut rng);
+        let dy = if model.kind() == ModelKind::Lumped2d { 0.0 } else { sd * crate::random::standard_normal(&mut rng) };
+        sim.rest_m[0] += dx;
+        sim.rest_m[1] += dy;
+        sim.runout_m = (sim.rest_m[0] - run.release_m[0]).hypot(sim.rest_m[1] - run.release_m[1]);
+    }
+    sim
+}
+
+/// Seed offset of the survey errors [`as_measured`] draws (ours: any fixed number apart from the simulations').
+const REST_NOISE_SEED: u64 = 0x5EED_0F0F_2E57;
+
 /// Simulates runs `which` (indices into `model.runs()`) `repeats` times each under `candidate`, in parallel over
 /// runs × repeats on `threads` threads (0 = all cores). Results are in the order of `which` and do not depend on
 /// the thread count.
@@ -244,10 +272,9 @@ pub fn evaluate_prepared(
 ) -> Vec<RunSims> {
     let runs = model.runs();
     let n = which.len() * repeats;
-    let attempts = model.release_attempts();
     let flat = crate::parallel::collect_in_order(n, threads, |k| {
         let (i, r) = (which[k / repeats], k % repeats);
-        simulate_released(prepared, &runs[i], r, seed, attempts)
+        as_measured(model, prepared, &runs[i], r, seed)
     });
     let mut out: Vec<RunSims> = which.iter().map(|&i| RunSims { run: i, sims: Vec::with_capacity(repeats) }).collect();
     for (k, s) in flat.into_iter().enumerate() {

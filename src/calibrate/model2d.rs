@@ -39,6 +39,8 @@ pub struct Model2d {
     bounce_reads: bool,
     /// The tracking error's sd, m, when simulated paths are read as the tracks were (`track_noise_m`).
     track_noise_m: Option<f64>,
+    /// The survey's error on each rest point coordinate, sd in m (`rest_noise_m`).
+    rest_noise_m: Option<f64>,
     /// The campaign folder and the profile file, for [`Model::scenario_files`] (`None` when built from parts).
     files: Option<(PathBuf, PathBuf)>,
 }
@@ -54,7 +56,8 @@ impl Model2d {
     ) -> Result<Model2d> {
         let profile = Profile::from_csv_path(profile_file)?;
         let mut model = Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
-            .with_release_attempts(cfg.release_attempts);
+            .with_release_attempts(cfg.release_attempts)
+            .with_rest_noise(cfg.rest_noise_m);
         model.files = Some((campaign.dir.clone(), profile_file.to_path_buf()));
         Ok(model.with_tracks(&campaign.tracks, cfg.track_noise_m)?.with_bounce_reads(cfg.bounce_weight != Some(0.0)))
     }
@@ -95,6 +98,7 @@ impl Model2d {
             rebounds,
             bounce_reads: false,
             track_noise_m: None,
+            rest_noise_m: None,
             files: None,
         })
     }
@@ -138,6 +142,12 @@ impl Model2d {
     /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model2d::from_parts`]).
     pub fn with_release_attempts(mut self, attempts: usize) -> Model2d {
         self.release_attempts = attempts;
+        self
+    }
+
+    /// The model with [`CalibrationConfig::rest_noise_m`] set (none by [`Model2d::from_parts`]).
+    pub fn with_rest_noise(mut self, rest_noise_m: Option<f64>) -> Model2d {
+        self.rest_noise_m = rest_noise_m;
         self
     }
 
@@ -246,6 +256,10 @@ impl Model for Model2d {
 
     fn track_noise_m(&self) -> Option<f64> {
         self.track_noise_m
+    }
+
+    fn rest_noise_m(&self) -> Option<f64> {
+        self.rest_noise_m
     }
 
     fn map_frame(&self) -> MapFrame {

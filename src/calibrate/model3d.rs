@@ -43,6 +43,8 @@ pub struct Model3d {
     bounce_reads: bool,
     /// The tracking error's sd, m, when simulated paths are read as the tracks were (`track_noise_m`).
     track_noise_m: Option<f64>,
+    /// The survey's error on each rest point coordinate, sd in m (`rest_noise_m`).
+    rest_noise_m: Option<f64>,
     /// The campaign folder and the terrain as read, for [`Model::scenario_toml`] (`None` when built from parts).
     files: Option<(std::path::PathBuf, TerrainSpec)>,
 }
@@ -113,7 +115,8 @@ impl Model3d {
             bodies.insert(id.clone(), campaign.body(block)?);
         }
         let mut model = Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)?
-            .with_release_attempts(cfg.release_attempts);
+            .with_release_attempts(cfg.release_attempts)
+            .with_rest_noise(cfg.rest_noise_m);
         model.files = Some((campaign.dir.clone(), spec));
         Ok(model
             .with_tracks(&campaign.tracks, cfg.track_noise_m)?
@@ -173,6 +176,7 @@ impl Model3d {
             rebounds,
             bounce_reads: false,
             track_noise_m: None,
+            rest_noise_m: None,
             files: None,
         })
     }
@@ -206,6 +210,12 @@ impl Model3d {
     /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model3d::from_parts`]).
     pub fn with_release_attempts(mut self, attempts: usize) -> Model3d {
         self.release_attempts = attempts;
+        self
+    }
+
+    /// The model with [`CalibrationConfig::rest_noise_m`] set (none by [`Model3d::from_parts`]).
+    pub fn with_rest_noise(mut self, rest_noise_m: Option<f64>) -> Model3d {
+        self.rest_noise_m = rest_noise_m;
         self
     }
 
@@ -318,6 +328,10 @@ impl Model for Model3d {
 
     fn track_noise_m(&self) -> Option<f64> {
         self.track_noise_m
+    }
+
+    fn rest_noise_m(&self) -> Option<f64> {
+        self.rest_noise_m
     }
 
     fn reads_bounces(&self) -> bool {
