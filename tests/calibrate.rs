@@ -571,6 +571,34 @@ fn a_declared_survey_error_makes_the_true_models_ranges_hold_the_noisy_rest_poin
 }
 
 #[test]
+fn a_declared_survey_error_moves_a_rigid_bodys_rest_point_in_both_horizontal_coordinates() {
+    let spec = Synthetic3d { runs_per_group: 2, release_points: 2, masses_kg: vec![50.0, 400.0], ..Default::default() };
+    let plain = synthetic_3d(&spec, SimParams::default()).unwrap();
+    let read = synthetic_3d(&spec, SimParams::default()).unwrap().with_rest_noise(Some(2.0));
+    let all: Vec<usize> = (0..plain.runs().len()).collect();
+    let c = base_candidate(&plain, &CalibrationConfig::default()).0;
+    let (a, b) = (evaluate(&plain, &c, &all, 10, 1, 0).unwrap(), evaluate(&read, &c, &all, 10, 1, 0).unwrap());
+    let mut d2 = [0.0; 2];
+    let mut n = 0.0;
+    for (ra, rb) in a.iter().zip(&b) {
+        let run = &plain.runs()[ra.run];
+        for (x, y) in ra.sims.iter().zip(&rb.sims) {
+            assert_eq!((x.rest_m[2], &x.summary, x.stopped), (y.rest_m[2], &y.summary, y.stopped));
+            let runout = (y.rest_m[0] - run.release_m[0]).hypot(y.rest_m[1] - run.release_m[1]);
+            assert!((y.runout_m - runout).abs() < 1e-9);
+            for (sum, (u, v)) in d2.iter_mut().zip(x.rest_m.iter().zip(&y.rest_m)) {
+                *sum += (v - u).powi(2);
+            }
+            n += 1.0;
+        }
+    }
+    // 80 draws of sd 2 m per coordinate: each sample sd within 20 % of it.
+    for v in d2 {
+        assert!(((v / n).sqrt() - 2.0).abs() < 0.4, "{d2:?} over {n}");
+    }
+}
+
+#[test]
 fn profile_loop_adds_nothing_without_a_hidden_effect() {
     for (design, seed) in [
         ("control_a", 1),
