@@ -1,7 +1,7 @@
 //! The Tschamut campaign simulated under parameters you give, per block and over all runs: observed and simulated
-//! mean run-out, bias, run-out MAE, W1 and coverage, each of the two beside what the runs would show were the model
-//! right (`talus::calibrate::metrics`; 20 repeats per run, all 80 runs), the mean width of a run's simulated 5-95 % range
-//! and the observed run-outs' sd within a release group. For looking at what a parameter or an effect does to each
+//! mean run-out, bias, run-out MAE, W1 and coverage (20 repeats per run, all 80 runs; bias, W1 and coverage each
+//! beside what the runs would show were the model right, `talus::calibrate::metrics`), the mean width of a run's
+//! simulated 5-95 % range and the observed run-outs' sd within a release group. For looking at what a parameter or an effect does to each
 //! block without a calibration. The last column is the share of simulations that run farther than every observed
 //! run of their release group (the zone check's overrun share; about 1/(n+1) for a group of n runs if the model
 //! were right); `stalled` is the share of simulations that end within 1 m of their release.
@@ -123,7 +123,7 @@ fn main() {
         digest.finalize()
     );
     println!(
-        "block  runs  observed m  simulated m  bias m  MAE m  floor m  W1 m  W1 if right m  coverage  if right  90% width m  obs sd in group m  overrun  edge obs/sim  stalled"
+        "block  runs  observed m  simulated m  bias m  if right  MAE m  floor m  W1 m  W1 if right m  coverage  if right  90% width m  obs sd in group m  overrun  edge obs/sim  stalled"
     );
     for block in ["1", "2", "4", "all"] {
         let s: Vec<_> =
@@ -151,11 +151,12 @@ fn main() {
         let n_groups = groups.len() as f64;
         let sd = (within.iter().map(|d| d * d).sum::<f64>() / (within.len() as f64 - n_groups).max(1.0)).sqrt();
         println!(
-            "{block:>5}  {:>4}  {:>10.1}  {:>11.1}  {:>+6.1}  {:>5.1}  {:>7.1}  {:>4.1}  {:>13.1}  {:>8.2}  {:>8.2}  {width:>11.1}  {sd:>17.1}  {:>7.3}  {edge_obs:.2}/{edge_sim:.2}  {stalled:>7.3}",
+            "{block:>5}  {:>4}  {:>10.1}  {:>11.1}  {:>+6.1}  {:>8.1}  {:>5.1}  {:>7.1}  {:>4.1}  {:>13.1}  {:>8.2}  {:>8.2}  {width:>11.1}  {sd:>17.1}  {:>7.3}  {edge_obs:.2}/{edge_sim:.2}  {stalled:>7.3}",
             m.runs,
             m.observed_mean_m,
             m.simulated_mean_m,
             m.runout_bias_m,
+            m.runout_bias_if_right_m,
             m.runout_mae_m,
             m.scatter_floor_mae_m,
             m.runout_w1_m,

@@ -211,7 +211,7 @@ pub fn repeated_cross_validation(
         }
     }
     for (runs, per_repeat) in scopes {
-        let per_repeat: Vec<[(&str, f64); 8]> = per_repeat.iter().map(spread_metrics).collect();
+        let per_repeat: Vec<[(&str, f64); 9]> = per_repeat.iter().map(spread_metrics).collect();
         for (i, (metric, _)) in per_repeat[0].iter().enumerate() {
             let values: Vec<f64> = per_repeat.iter().map(|m| m[i].1).collect();
             let (mean, sd) = (stats::mean(&values), stats::sample_sd(&values));
@@ -239,7 +239,7 @@ fn write_study(out: &Path, stem: &str, study: &impl Serialize, markdown: &str) -
 }
 
 /// The metrics whose spread [`repeated_cross_validation`] reports.
-fn spread_metrics(m: &Metrics) -> [(&'static str, f64); 8] {
+fn spread_metrics(m: &Metrics) -> [(&'static str, f64); 9] {
     [
         ("runout_mae_m", m.runout_mae_m),
         ("runout_w1_m", m.runout_w1_m),
@@ -247,6 +247,7 @@ fn spread_metrics(m: &Metrics) -> [(&'static str, f64); 8] {
         ("coverage_90", m.coverage_90),
         ("coverage_90_if_right", m.coverage_90_if_right),
         ("runout_bias_m", m.runout_bias_m),
+        ("runout_bias_if_right_m", m.runout_bias_if_right_m),
         ("endpoint_mae_m", m.endpoint_mae_m),
         ("scatter_floor_mae_m", m.scatter_floor_mae_m),
     ]
@@ -296,13 +297,13 @@ fn cv_markdown(cv: &CrossValidation) -> String {
     let _ = writeln!(s, "Every run predicted once by the fold that did not see it; {:.0} s in all.\n", cv.total_s);
     let _ = writeln!(
         s,
-        "| model, runs | n | runout_mae_m | runout_w1_m | W1 if right | coverage_90 | coverage if right | runout_bias_m | endpoint_mae_m | floor |"
+        "| model, runs | n | runout_mae_m | runout_w1_m | W1 if right | coverage_90 | coverage if right | runout_bias_m | bias if right | endpoint_mae_m | floor |"
     );
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|");
     let row = |s: &mut String, l: &str, m: &Metrics| {
         let _ = writeln!(
             s,
-            "| {l} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:+.2} | {:.2} | {:.2} |",
+            "| {l} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:+.2} | {:.2} | {:.2} | {:.2} |",
             m.runs,
             m.runout_mae_m,
             m.runout_w1_m,
@@ -310,6 +311,7 @@ fn cv_markdown(cv: &CrossValidation) -> String {
             m.coverage_90,
             m.coverage_90_if_right,
             m.runout_bias_m,
+            m.runout_bias_if_right_m,
             m.endpoint_mae_m,
             m.scatter_floor_mae_m
         );

@@ -17,13 +17,14 @@
 //! of the group in the campaign (ours: a held-out set holds too few runs per group for its own median; the floor
 //! is only a yardstick and chooses nothing).
 //!
-//! **Were the model right** (`runout_w1_if_right_m`, `coverage_90_if_right`, ours): a few dozen field runs are a
-//! small sample, so even the true model shows a W1 above zero against them; and a 5–95 % interval read from R
-//! simulations holds a further draw less often than 90 % of the time (about 0.9 (R − 1)/(R + 1): 0.81 for R = 20).
+//! **Were the model right** (`runout_w1_if_right_m`, `coverage_90_if_right`, `runout_bias_if_right_m`, ours): a
+//! few dozen field runs are a small sample, so even the true model shows a W1 above zero against them, and a bias:
+//! the mean of n runs that scatter by σ is off by about σ/√n; and a 5–95 % interval read from R simulations holds a
+//! further draw less often than 90 % of the time (about 0.9 (R − 1)/(R + 1): 0.81 for R = 20).
 //! The yardsticks are the values the same runs would show were their field run-outs draws of the model itself: in
 //! draw d (d = 0..R) run i's observed run-out is replaced by its simulation (d + i) mod R and compared with the
-//! other R − 1 simulations (of every run for W1, of its own for coverage); the mean over the R draws (a parametric
-//! bootstrap that needs no further simulation). A `runout_w1_m` well above its yardstick is misfit, one near it is
+//! other R − 1 simulations (of every run for W1 and bias, of its own for coverage); the mean over the R draws, for
+//! the bias the root mean square (a parametric bootstrap that needs no further simulation). A `runout_w1_m` well above its yardstick is misfit, one near it is
 //! what the number of runs allows; a coverage above its yardstick means simulated ranges wider than the field's.
 //! They choose nothing.
 
@@ -53,6 +54,9 @@ pub struct Metrics {
     pub runout_w1_if_right_m: f64,
     /// The mean `coverage_90` these runs would show were their field run-outs draws of the model itself.
     pub coverage_90_if_right: f64,
+    /// The root mean square of the `runout_bias_m` these runs would show were their field run-outs draws of the
+    /// model itself, m.
+    pub runout_bias_if_right_m: f64,
     /// Runs measured.
     pub runs: usize,
     /// Simulations per run.
@@ -129,6 +133,7 @@ pub fn metrics(runs: &[FieldRun], sims: &[RunSims]) -> Metrics {
         scatter_floor_mae_m: scatter_floor(runs, &which),
         runout_w1_if_right_m: if_right[0],
         coverage_90_if_right: if_right[1],
+        runout_bias_if_right_m: if_right[2],
         runs: n,
         repeats: sims.first().map(|s| s.sims.len()).unwrap_or(0),
         observed_mean_m: mean(&obs),
@@ -160,15 +165,15 @@ pub fn scatter_floor(runs: &[FieldRun], which: &[usize]) -> f64 {
     mean(&which.iter().map(|&i| (runs[i].runout_m - med[&runs[i].group]).abs()).collect::<Vec<_>>())
 }
 
-/// [W1, coverage_90] were the model right: one simulation per run stands in for the field run (in draw d run i's
-/// simulation (d + i) mod R) against the other simulations, the mean over R draws (R the fewest simulations of a
+/// [W1, coverage_90, RMS bias] were the model right: one simulation per run stands in for the field run (in draw d
+/// run i's simulation (d + i) mod R) against the other simulations, over R draws (R the fewest simulations of a
 /// run; NaN below 2). See the module's "Were the model right".
-pub fn were_the_model_right(sims: &[RunSims]) -> [f64; 2] {
+pub fn were_the_model_right(sims: &[RunSims]) -> [f64; 3] {
     let r = sims.iter().map(|s| s.sims.len()).min().unwrap_or(0);
     if r < 2 {
-        return [f64::NAN; 2];
+        return [f64::NAN; 3];
     }
-    let (mut w1, mut covered) = (0.0, 0usize);
+    let (mut w1, mut covered, mut bias2) = (0.0, 0usize, 0.0);
     for d in 0..r {
         let (mut stand_ins, mut others) = (Vec::with_capacity(sims.len()), Vec::new());
         for (i, s) in sims.iter().enumerate() {
@@ -182,8 +187,9 @@ pub fn were_the_model_right(sims: &[RunSims]) -> [f64; 2] {
             others.extend(own);
         }
         w1 += wasserstein1(&stand_ins, &others);
+        bias2 += (mean(&others) - mean(&stand_ins)).powi(2);
     }
-    [w1 / r as f64, covered as f64 / (r * sims.len()) as f64]
+    [w1 / r as f64, covered as f64 / (r * sims.len()) as f64, (bias2 / r as f64).sqrt()]
 }
 
 /// The continuous ranked probability score of a simulated run-out sample against the observed run-out, m (the
@@ -315,6 +321,8 @@ pub(crate) mod tests {
         // Coverage: each stand-in against the 5-95 % of its run's other two; 11 in [9.15, 11.85] (run 0, and run 1
         // in its first draw) and 31 in [30.1, 31.9] are inside, the other six outside.
         assert!((m.coverage_90_if_right - 1.0 / 3.0).abs() < 1e-12, "{m:?}");
+        // Bias: the others' mean less the stand-ins', 105/6 − 52/3 = 1/6, 104/6 − 53/3 = −1/3 and 1/6: RMS √(1/18).
+        assert!((m.runout_bias_if_right_m - (1.0f64 / 18.0).sqrt()).abs() < 1e-12, "{m:?}");
         let set = metrics_set(&runs, &s);
         assert_eq!(set.by_block.len(), 2);
         assert!((set.by_block["b1"].runout_mae_m - 11.0).abs() < 1e-12);
@@ -329,6 +337,7 @@ pub(crate) mod tests {
         // 0.805 to 0.828, where 0.9 (R - 1)/(R + 1) = 0.814).
         let (n, r) = (30, 20);
         let (mut ratios, mut coverage, mut coverage_if_right) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut biases, mut bias_yardsticks) = (Vec::new(), Vec::new());
         for seed in 1..=20 {
             let mut rng = stream(seed, 0);
             let mut draw = |i: usize| 100.0 + 2.0 * i as f64 + 15.0 * standard_normal(&mut rng);
@@ -337,6 +346,10 @@ pub(crate) mod tests {
             let m = metrics(&same, &s);
             // 30 draws of sd ≈ 15-23 m are a small sample: even the true model shows a W1 of a few metres.
             assert!((3.0..6.0).contains(&m.runout_w1_if_right_m), "{m:?}");
+            // and a bias of about 15 m / √30 = 2.7 m.
+            assert!((1.5..4.5).contains(&m.runout_bias_if_right_m), "{m:?}");
+            biases.push(m.runout_bias_m);
+            bias_yardsticks.push(m.runout_bias_if_right_m);
             ratios.push(m.runout_w1_m / m.runout_w1_if_right_m);
             coverage.push(m.coverage_90);
             coverage_if_right.push(m.coverage_90_if_right);
@@ -348,6 +361,11 @@ pub(crate) mod tests {
         let mean_ratio = mean(&ratios);
         assert!((0.85..1.15).contains(&mean_ratio), "{ratios:?}");
         assert!(ratios.iter().all(|&x| x < 2.2), "{ratios:?}");
+        // The field runs' biases scatter as the yardstick says.
+        let rms_bias = (biases.iter().map(|b| b * b).sum::<f64>() / biases.len() as f64).sqrt();
+        let mean_if_right = mean(&bias_yardsticks);
+        // Over seeds 1..=20: RMS bias 2.92 m against the yardsticks' mean 2.76 m (2.09 to 3.51).
+        assert!((0.8..1.25).contains(&(rms_bias / mean_if_right)), "{rms_bias} {mean_if_right}");
         // A 5-95 % interval of 20 simulations holds about 81 % of further draws, not 90 %.
         assert!(coverage_if_right.iter().all(|c| (0.79..0.84).contains(c)), "{coverage_if_right:?}");
         assert!((mean(&coverage) - mean(&coverage_if_right)).abs() < 0.04, "{coverage:?}");

@@ -197,7 +197,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
 /// One line of `set`'s run-out errors, baseline `b` against final `f`.
 fn print_errors(set: &str, b: &Metrics, f: &Metrics) {
     println!(
-        "{set} runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m, runout_w1_m {:.2} -> {:.2} m (if right {:.2}), coverage_90 {:.2} -> {:.2} (if right {:.2})",
-        b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, b.runout_w1_m, f.runout_w1_m, f.runout_w1_if_right_m, b.coverage_90, f.coverage_90, f.coverage_90_if_right
+        "{set} runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m (if right ±{:.2}), runout_w1_m {:.2} -> {:.2} m (if right {:.2}), coverage_90 {:.2} -> {:.2} (if right {:.2})",
+        b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, f.runout_bias_if_right_m, b.runout_w1_m, f.runout_w1_m, f.runout_w1_if_right_m, b.coverage_90, f.coverage_90, f.coverage_90_if_right
     );
 }
