@@ -519,26 +519,37 @@ pub fn aims(m: &Metrics) -> [bool; 4] {
     ]
 }
 
+/// Whether a right model would meet the aims of bias, W1 and coverage on these runs, on average (the yardsticks of
+/// [`Metrics`]: the RMS bias, the mean W1 and coverage were the field runs draws of the model), in the order of
+/// [`aims`].
+pub fn aims_if_right(m: &Metrics) -> [bool; 3] {
+    [m.runout_bias_if_right_m <= 3.0, m.runout_w1_if_right_m < 5.0, (0.8..=0.97).contains(&m.coverage_90_if_right)]
+}
+
 fn metrics_rows(s: &mut String, label: &str, m: &Metrics) {
     if m.runs == 0 {
         return;
     }
-    let a = aims(m);
-    let mark = |ok: bool| if ok { "" } else { " ✗" };
+    let (a, r) = (aims(m), aims_if_right(m));
+    let mark = |k: usize| match (a[k], r.get(k).copied().unwrap_or(true)) {
+        (true, _) => "",
+        (false, true) => " ✗",
+        (false, false) => " ✗†",
+    };
     let _ = writeln!(
         s,
         "| {label} | {} | {}{} | {}{} | {} | {}{} | {} | {}{} | {} | {} | {} | {} |",
         m.runs,
         fmt(m.runout_mae_m),
-        mark(a[3]),
+        mark(3),
         fmt(m.runout_w1_m),
-        mark(a[1]),
+        mark(1),
         fmt(m.runout_w1_if_right_m),
         fmt(m.coverage_90),
-        mark(a[2]),
+        mark(2),
         fmt(m.coverage_90_if_right),
         fmt(m.runout_bias_m),
-        mark(a[0]),
+        mark(0),
         fmt(m.runout_bias_if_right_m),
         fmt(m.endpoint_mae_m),
         fmt(m.scatter_floor_mae_m),
@@ -597,7 +608,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         );
     }
     let _ = writeln!(s, "## Errors\n");
-    let _ = writeln!(s, "Run-out MAE, W1, bias and end-point MAE in metres; floor: the run-out MAE of the observed runs' own group median; W1, coverage and bias if right: what these runs would show were their field run-outs draws of the model itself (the mean; for the bias the root mean square: a small sample shows a W1 and a bias even against the true model, and a 5–95 % interval of R simulations holds about 0.9 (R − 1)/(R + 1) of further draws; docs/calibration.md); ✗: misses the aim of issue 5 (bias within ±3 m, W1 < 5 m, coverage 0.8–0.97, MAE within 20 % of the floor).\n");
+    let _ = writeln!(s, "Run-out MAE, W1, bias and end-point MAE in metres; floor: the run-out MAE of the observed runs' own group median; W1, coverage and bias if right: what these runs would show were their field run-outs draws of the model itself (the mean; for the bias the root mean square: a small sample shows a W1 and a bias even against the true model, and a 5–95 % interval of R simulations holds about 0.9 (R − 1)/(R + 1) of further draws; docs/calibration.md); ✗: misses the aim of issue 5 (bias within ±3 m, W1 < 5 m, coverage 0.8–0.97, MAE within 20 % of the floor); ✗†: a right model would miss it too on these runs, on average, so the miss alone does not tell a wrong model from a right one.\n");
     let _ = writeln!(s, "| model, runs | n | runout_mae_m | runout_w1_m | W1 if right | coverage_90 | coverage if right | runout_bias_m | bias if right | endpoint_mae_m | floor | MAE/floor |");
     let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (name, st) in [("baseline", &r.baseline), ("final", &r.final_stage)] {
@@ -858,4 +869,36 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         t.population_fit_s, t.back_analysis_s, t.effects_loop_s, t.final_evaluation_s, t.total_s, t.simulations, t.threads
     );
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::metrics::metrics;
+    use crate::calibrate::metrics::tests::{run, sims};
+
+    #[test]
+    fn a_missed_aim_that_a_right_model_would_miss_too_is_marked_apart() {
+        let m0 = metrics(&[run(0, 0, 10.0)], &[sims(0, &[9.0, 10.0, 11.0, 12.0])]);
+        let row = |m: &Metrics| {
+            let mut s = String::new();
+            metrics_rows(&mut s, "x", m);
+            s
+        };
+        // W1 of 8 m: missed; a right model's 3 m would meet the aim, its 6 m would not.
+        let wrong = Metrics { runout_w1_m: 8.0, runout_w1_if_right_m: 3.0, ..m0 };
+        assert!(row(&wrong).contains("| 8.00 ✗ | 3.00 |"), "{}", row(&wrong));
+        let small_sample = Metrics { runout_w1_if_right_m: 6.0, ..wrong };
+        assert!(row(&small_sample).contains("| 8.00 ✗† | 6.00 |"), "{}", row(&small_sample));
+        // A bias of 4 m where the right model's RMS is 5 m; a coverage of 0.7 where the right model's is 0.75.
+        let b = Metrics {
+            runout_bias_m: 4.0,
+            runout_bias_if_right_m: 5.0,
+            coverage_90: 0.7,
+            coverage_90_if_right: 0.75,
+            ..m0
+        };
+        assert!(row(&b).contains("| 4.00 ✗† | 5.00 |") && row(&b).contains("| 0.70 ✗† | 0.75 |"), "{}", row(&b));
+        assert_eq!(aims_if_right(&m0), [true, true, false]);
+    }
 }
