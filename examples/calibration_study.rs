@@ -11,7 +11,7 @@
 //! matches a prefix; default: all; STUDY_SEEDS=N runs the controls on seeds 1..=N; STUDY_CONFIG=FILE reads the
 //! settings from FILE, and the synthetic models read their bounces and rest points as those settings say)
 use std::time::Instant;
-use talus::calibrate::synthetic::{case_2d, case_3d, synthetic_2d, synthetic_3d, zone_overlap, Hidden};
+use talus::calibrate::synthetic::{case_2d, case_3d, synthetic_2d, synthetic_3d, zone_overlap, Hidden, Synthetic3d};
 use talus::calibrate::{self, params::Region, split, CalibrationConfig, Model};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
@@ -39,6 +39,9 @@ fn main() {
     let bounces_3d = cfg.bounce_weight.is_some_and(|w| w > 0.0);
     // And read their simulated rest points with the survey error the settings declare (`rest_noise_m`).
     let rest_noise = cfg.rest_noise_m;
+    let model_3d = move |spec: &Synthetic3d| {
+        synthetic_3d(spec, SimParams::default()).unwrap().with_bounce_reads(bounces_3d).with_rest_noise(rest_noise)
+    };
     let mut cases: Vec<(String, MakeModel, Hidden)> = Vec::new();
     // The control cases' seeds: 1..=3, or 1..=STUDY_SEEDS.
     let n_seeds = std::env::var("STUDY_SEEDS").ok().and_then(|v| v.parse::<u64>().ok()).unwrap_or(3);
@@ -62,28 +65,14 @@ fn main() {
     for (label, name, seed) in effect_cases {
         let spec = case_3d(name, seed).unwrap();
         let hidden = spec.hidden.clone();
-        let make = move || {
-            synthetic_3d(&spec, SimParams::default()).unwrap().with_bounce_reads(bounces_3d).with_rest_noise(rest_noise)
-        };
-        cases.push((label, Box::new(move || Box::new(make())), hidden));
+        cases.push((label, Box::new(move || Box::new(model_3d(&spec))), hidden));
     }
     for base in
         ["control_a", "control_b", "control_c", "control_d", "control_e", "control_a_tracked", "control_d_tracked"]
     {
         for &s in &seeds {
             let spec = case_3d(base, s).unwrap();
-            cases.push((
-                format!("{base}_{s}"),
-                Box::new(move || {
-                    Box::new(
-                        synthetic_3d(&spec, SimParams::default())
-                            .unwrap()
-                            .with_bounce_reads(bounces_3d)
-                            .with_rest_noise(rest_noise),
-                    )
-                }),
-                Hidden::None,
-            ));
+            cases.push((format!("{base}_{s}"), Box::new(move || Box::new(model_3d(&spec))), Hidden::None));
         }
     }
     for base in ["speed", "size", "zone", "control_a", "control_b", "speed_tracked", "control_a_tracked"] {
