@@ -4,7 +4,7 @@
 //! with a ratio above 0.7 cannot show a 30 % cut however good the loop is.
 //!
 //! Run: cargo run --release --example explore_synthetic [-- NAME ...]   (2d_control_a 2d_control_b 2d_speed_steep
-//! 2d_speed 2d_size 2d_zone speed speed_mixed size size_drag zone control_a control_b control_c control_d control_e
+//! 2d_speed 2d_size 2d_zone speed speed_mixed size size_drag zone slip control_a control_b control_c control_d control_e
 //! 3d_designs; mixed_designs [rivals] [DESIGN ...]; tracks [speed speed_mixed thrown3]; crps_noise; track_noise;
 //! default: all but 3d_designs, mixed_designs, tracks, crps_noise and track_noise; the 3DRB ones take about a minute
 //! each on 2 cores, 3d_designs 15 minutes, mixed_designs 7 minutes, tracks 4 minutes a design)
@@ -456,6 +456,12 @@ fn main() {
         "size",
         "size_drag",
         "zone",
+        // RAMMS's slippage-dependent friction, μ_max = tan 63° (2.0, Bartelt et al.'s default) over φ_d 32°, on the
+        // `control_e` design (2026-11-26): ratio 1.04, the observed mean run-out 52.4 m against 52.6 m without it.
+        // On the `control_c` plain (μ_max tan 50°) 1.04, on the `control_b` cube drops 1.07 (mean 14.6 m either
+        // way): a rolling boulder's contact does not slip, and a tumbling cube's contacts are too short for the
+        // slippage to build up (it decays at β = 20 s⁻¹ between them), so these designs cannot show it.
+        "slip",
         "control_a",
         "control_b",
         "control_c",

@@ -26,7 +26,7 @@
 //!
 //! [effects]
 //! candidates = ["speed_restitution", "angle_restitution", "mass_restitution", "roughness",
-//!               "rolling_resistance", "soft_drag", "vegetation_drag", "zone"]
+//!               "rolling_resistance", "soft_drag", "vegetation_drag", "zone"]   # default; "slip_friction" if listed
 //! min_improvement = 0.05    # relative cut of the cross-validated mean CRPS to keep an effect
 //! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
 //! # screen_repeats = 20     # simulations per run in the loop's grid screening (default: repeats)
@@ -216,7 +216,8 @@ pub enum Objective {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct EffectsConfig {
-    /// Effects the loop may add (default: all that the model supports).
+    /// Effects the loop may add (default: all that the model supports except `slip_friction`, which is tried only
+    /// when listed).
     pub candidates: Vec<String>,
     /// Effects the user knows are there, switched on from the start as part of the model the baseline calibrates:
     /// effect name → its parameter, fixed (a number) or free (`[min, max]` or `{ min, max, start }`) (default:

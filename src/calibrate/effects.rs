@@ -32,6 +32,8 @@ pub enum EffectKind {
     Zone,
     /// The CRSP tangential rule with spin (2DLM).
     CrspRotation,
+    /// RAMMS's slippage-dependent friction (3DRB; tried only when listed in `candidates` or declared).
+    SlipFriction,
 }
 
 /// What the loop knows about an effect.
@@ -84,9 +86,11 @@ pub fn recentring(kind: EffectKind) -> Recentring {
         EffectKind::SpeedRestitution | EffectKind::AngleRestitution | EffectKind::MassRestitution => {
             Recentring::CrScale
         }
-        EffectKind::RollingResistance | EffectKind::SoftDrag | EffectKind::VegetationDrag | EffectKind::Roughness => {
-            Recentring::DynamicFriction
-        }
+        EffectKind::RollingResistance
+        | EffectKind::SoftDrag
+        | EffectKind::VegetationDrag
+        | EffectKind::Roughness
+        | EffectKind::SlipFriction => Recentring::DynamicFriction,
         EffectKind::Zone | EffectKind::CrspRotation => Recentring::Mobility,
     }
 }
@@ -176,6 +180,16 @@ const VEGETATION_DRAG_3D: EffectDef = EffectDef {
     formula: "in contact with the ground a force -c v: velocity and spin decay as exp(-(c/m) t), light rocks slow most (RAMMS's forest drag F_d = -c_d v, Leine et al. 2014, physics.md §2; applied in contact for vegetation lower than the rock: ours)",
 };
 
+const SLIP_3D: EffectDef = EffectDef {
+    kind: EffectKind::SlipFriction,
+    name: "slip_friction",
+    param: Some("max_deg"),
+    grid: &[30.0, 40.0, 50.0, 63.0],
+    bounds: (0.0, 85.0),
+    signature: &["gentle_fraction", "end_slope_deg", "path_slope_mean_deg"],
+    formula: "mu(s) = mu_min + (2/pi)(mu_max - mu_min) atan(kappa s), s the distance travelled in contact, decaying as exp(-beta t) in flight; mu_min the dynamic friction, mu_max = tan(max_deg), kappa 0.7 1/m, beta 20 1/s (RAMMS, Leine et al. 2014 eqs. 46-47, physics.md §2)",
+};
+
 const ZONE: EffectDef = EffectDef {
     kind: EffectKind::Zone,
     name: "zone",
@@ -209,12 +223,20 @@ const CRSP_2D: EffectDef = EffectDef {
 
 /// The effects a model supports, in the order the loop considers them.
 pub fn effects_for(model: ModelKind) -> &'static [EffectDef] {
-    const D3: [EffectDef; 8] = [SPEED_3D, ANGLE_3D, MASS_3D, ROUGH_3D, ROLL_3D, DRAG_3D, VEGETATION_DRAG_3D, ZONE];
+    const D3: [EffectDef; 9] =
+        [SPEED_3D, ANGLE_3D, MASS_3D, ROUGH_3D, ROLL_3D, DRAG_3D, VEGETATION_DRAG_3D, ZONE, SLIP_3D];
     const D2: [EffectDef; 4] = [SPEED_2D, MASS_2D, CRSP_2D, ZONE];
     match model {
         ModelKind::Rigid3d => &D3,
         ModelKind::Lumped2d => &D2,
     }
+}
+
+/// True if the loop tries `kind` when the settings list no `candidates`. Slippage-dependent friction is tried only
+/// when listed: at Tschamut it widens the run-outs instead of trimming their tail, and the synthetic study's
+/// controls have not been run with it (docs/calibration.md, "Slippage-dependent friction").
+pub fn proposed_by_default(kind: EffectKind) -> bool {
+    kind != EffectKind::SlipFriction
 }
 
 /// The definition of `kind` for `model`.

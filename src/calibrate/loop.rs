@@ -38,8 +38,8 @@
 use super::config::{CalibrationConfig, ModelKind, ParamSetting};
 use super::diagnose::{diagnose, merged, spread_check, Diagnostic, DEPOSITION_EXCESS};
 use super::effects::{
-    definition, effects_for, recentring, EffectDef, EffectKind, Recentring, CR_SCALE_GRID, MOBILITY_GRID,
-    ZONE_DRAG_GRID, ZONE_MOBILITY_GRID,
+    definition, effects_for, proposed_by_default, recentring, EffectDef, EffectKind, Recentring, CR_SCALE_GRID,
+    MOBILITY_GRID, ZONE_DRAG_GRID, ZONE_MOBILITY_GRID,
 };
 use super::fit::{fit, Context};
 use super::impacts::{self, BOUNCE_RESIDUAL};
@@ -157,10 +157,7 @@ pub fn effects_loop(
     let kind = model.kind();
     let mut current = baseline.clone();
     let mut out = LoopResult { candidate: current.clone(), added: Vec::new(), trials: Vec::new(), rounds: Vec::new() };
-    let allowed: Vec<&'static EffectDef> = effects_for(kind)
-        .iter()
-        .filter(|d| cfg.effects.candidates.is_empty() || cfg.effects.candidates.iter().any(|c| c == d.name))
-        .collect();
+    let allowed = allowed_effects(cfg, kind);
     let frame = model.map_frame();
     let mut free = base_free.to_vec();
     for round in 1..=cfg.effects.max_rounds {
@@ -614,6 +611,15 @@ fn refit_cv(
 }
 
 /// The effects whose signature shows, strongest first.
+/// The effects the loop may propose: those listed in `candidates`, or, when none are, those proposed by default.
+fn allowed_effects(cfg: &CalibrationConfig, kind: ModelKind) -> Vec<&'static EffectDef> {
+    let listed = &cfg.effects.candidates;
+    effects_for(kind)
+        .iter()
+        .filter(|d| if listed.is_empty() { proposed_by_default(d.kind) } else { listed.iter().any(|c| c == d.name) })
+        .collect()
+}
+
 fn propose(
     ctx: &Context,
     allowed: &[&'static EffectDef],
@@ -1020,6 +1026,19 @@ mod tests {
         // Equal complexity: the better one.
         assert_eq!(choose(&[(worse.as_slice(), 1), (speed.as_slice(), 1)], true).unwrap().kept, 1);
         assert!(choose(&[], true).is_none());
+    }
+
+    #[test]
+    fn slippage_friction_is_tried_only_when_listed() {
+        let names = |cfg: &CalibrationConfig| {
+            allowed_effects(cfg, ModelKind::Rigid3d).iter().map(|d| d.name).collect::<Vec<_>>()
+        };
+        let mut cfg = CalibrationConfig::default();
+        let by_default = names(&cfg);
+        assert_eq!(by_default.len(), effects_for(ModelKind::Rigid3d).len() - 1);
+        assert!(!by_default.contains(&"slip_friction") && by_default.contains(&"rolling_resistance"));
+        cfg.effects.candidates = vec!["slip_friction".into(), "zone".into()];
+        assert_eq!(names(&cfg), ["zone", "slip_friction"]);
     }
 
     #[test]

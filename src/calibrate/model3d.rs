@@ -397,6 +397,7 @@ impl Model3d {
                 EffectKind::Roughness => fx.roughness_m = Some(value(&e.label, "rough_m")?),
                 EffectKind::RollingResistance => fx.rolling_resistance = Some(value(&e.label, "mu_r")?),
                 EffectKind::VegetationDrag => fx.vegetation_drag_kg_s = Some(value(&e.label, "c_kg_s")?),
+                EffectKind::SlipFriction => fx.slip_friction_max_deg = Some(value(&e.label, "max_deg")?),
                 EffectKind::SoftDrag => {
                     fx.soft_drag_per_s = Some(value(&e.label, "rate_per_s")?);
                     fx.soft_materials = e.material.iter().cloned().collect();

@@ -42,6 +42,8 @@ pub enum Hidden {
     /// A linear drag in contact with the ground everywhere (3DRB), C in kg/s: a rock slows at C/m, so light rocks
     /// are held back most (a size effect through resistance rather than through the bounce).
     VegetationDrag(f64),
+    /// RAMMS's slippage-dependent friction (3DRB), μ_max as an angle in degrees (κ and β at their defaults).
+    SlipFriction(f64),
 }
 
 impl Hidden {
@@ -53,6 +55,7 @@ impl Hidden {
             Hidden::Roughness(_) => Some(EffectKind::Roughness),
             Hidden::MassRestitution(_) => Some(EffectKind::MassRestitution),
             Hidden::VegetationDrag(_) => Some(EffectKind::VegetationDrag),
+            Hidden::SlipFriction(_) => Some(EffectKind::SlipFriction),
             Hidden::SoftZone(..) | Hidden::DragZone(..) => Some(EffectKind::Zone),
         }
     }
@@ -244,6 +247,7 @@ pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
         "control_b" => drops,
         "size_drag" => Synthetic3d { hidden: Hidden::VegetationDrag(200.0), ..flat },
         "control_e" => flat,
+        "slip" => Synthetic3d { hidden: Hidden::SlipFriction(63.0), ..flat },
         _ => return None,
     })
 }
@@ -348,6 +352,10 @@ pub fn truth_3d(spec: &Synthetic3d) -> Candidate {
             truth.params.set("hidden.c_kg_s", *c);
             truth.effects.push(hidden_effect(EffectKind::VegetationDrag));
         }
+        Hidden::SlipFriction(max_deg) => {
+            truth.params.set("hidden.max_deg", *max_deg);
+            truth.effects.push(hidden_effect(EffectKind::SlipFriction));
+        }
         Hidden::SoftZone(poly, [cr, s, d]) => add_zone_3d(&mut truth, poly, [*cr, 0.02, *s, *d], 0.0),
         Hidden::DragZone(poly, rate) => add_zone_3d(&mut truth, poly, spec.material, *rate),
     }
@@ -422,7 +430,11 @@ pub fn case_2d(name: &str, seed: u64) -> Option<Synthetic2d> {
 pub fn truth_2d(spec: &Synthetic2d) -> Candidate {
     let mut truth = Candidate { params: material_params_2d("ground", spec.material), effects: Vec::new() };
     match &spec.hidden {
-        Hidden::None | Hidden::Roughness(_) | Hidden::DragZone(..) | Hidden::VegetationDrag(_) => {}
+        Hidden::None
+        | Hidden::Roughness(_)
+        | Hidden::DragZone(..)
+        | Hidden::VegetationDrag(_)
+        | Hidden::SlipFriction(_) => {}
         Hidden::SpeedRestitution(k) => {
             truth.effects.push(hidden_effect(EffectKind::SpeedRestitution));
             truth.params.set("hidden.k_mps", *k);

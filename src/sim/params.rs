@@ -143,6 +143,16 @@ pub struct Effects {
     /// physics.md §2, applied in contact: ours, for grass or shrubs lower than the rock); c this value, kg/s. Added
     /// to the soft-ground drag.
     pub vegetation_drag_kg_s: Option<f64>,
+    /// RAMMS's slippage-dependent friction (Leine et al. 2014, eqs. 46-47 and 51; physics.md §2): the friction
+    /// coefficient grows with the slippage s, the distance the rock's centre travels while touching the ground,
+    /// μ(s) = μ_min + (2/π)(μ_max − μ_min)·atan(κ s), and s decays as exp(−β t) in flight, so a rock that rolls or
+    /// slides far meets more friction than one that bounces. μ_min is the material's dynamic friction (tan φ_d, as
+    /// drawn for the rock); this value is atan(μ_max) in degrees (μ_max below μ_min leaves friction unchanged).
+    pub slip_friction_max_deg: Option<f64>,
+    /// κ of `slip_friction_max_deg`, 1/m (default 0.7, Leine's demonstration set).
+    pub slip_friction_kappa_per_m: Option<f64>,
+    /// β of `slip_friction_max_deg`, 1/s (default 20, Leine's demonstration set).
+    pub slip_friction_decay_per_s: Option<f64>,
 }
 
 impl Effects {
@@ -155,6 +165,7 @@ impl Effects {
             && self.rolling_resistance.is_none()
             && self.soft_drag_per_s.is_none()
             && self.vegetation_drag_kg_s.is_none()
+            && self.slip_friction_max_deg.is_none()
     }
 
     /// Checks ranges; `prefix` is prepended to field names.
@@ -174,7 +185,28 @@ impl Effects {
         check("roughness_m", self.roughness_m, 0.0, 100.0)?;
         check("rolling_resistance", self.rolling_resistance, 0.0, 5.0)?;
         check("soft_drag_per_s", self.soft_drag_per_s, 0.0, 1000.0)?;
-        check("vegetation_drag_kg_s", self.vegetation_drag_kg_s, 0.0, 1e6)
+        check("vegetation_drag_kg_s", self.vegetation_drag_kg_s, 0.0, 1e6)?;
+        check("slip_friction_max_deg", self.slip_friction_max_deg, 0.0, 85.0)?;
+        check("slip_friction_kappa_per_m", self.slip_friction_kappa_per_m, 1e-3, 1e3)?;
+        check("slip_friction_decay_per_s", self.slip_friction_decay_per_s, 0.0, 1e4)
+    }
+
+    /// The friction coefficient after `slip_friction_max_deg` for a rock with dynamic friction coefficient `mu_min`
+    /// and slippage `slippage_m` (`mu_min` when off).
+    pub fn slip_friction(&self, mu_min: f64, slippage_m: f64) -> f64 {
+        match self.slip_friction_max_deg {
+            Some(max_deg) => {
+                let mu_max = max_deg.to_radians().tan().max(mu_min);
+                let kappa = self.slip_friction_kappa_per_m.unwrap_or(0.7);
+                mu_min + std::f64::consts::FRAC_2_PI * (mu_max - mu_min) * (kappa * slippage_m).atan()
+            }
+            None => mu_min,
+        }
+    }
+
+    /// The factor by which the slippage of `slip_friction_max_deg` decays over `h` seconds in flight.
+    pub fn slippage_decay(&self, h: f64) -> f64 {
+        (-self.slip_friction_decay_per_s.unwrap_or(20.0) * h).exp()
     }
 
     /// The drag rate of `vegetation_drag_kg_s` on a rock of `mass_kg`, 1/s (0 when off).
@@ -196,5 +228,25 @@ impl Effects {
             e *= (mass_kg / self.mass_reference_kg.unwrap_or(100.0)).powf(-b);
         }
         e.clamp(0.0, 1.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slippage_friction_runs_from_the_dynamic_friction_to_its_maximum_and_decays_in_flight() {
+        let off = Effects::default();
+        assert_eq!(off.slip_friction(0.4, 10.0), 0.4);
+        let fx = Effects { slip_friction_max_deg: Some(45.0), ..Effects::default() };
+        assert_eq!(fx.slip_friction(0.4, 0.0), 0.4);
+        // κ s = 1: half of the way up, (2/π) atan(1) = 1/2.
+        assert!((fx.slip_friction(0.4, 1.0 / 0.7) - 0.7).abs() < 1e-12);
+        assert!((fx.slip_friction(0.4, 1e9) - 1.0).abs() < 1e-6);
+        // A maximum below the rock's dynamic friction leaves it unchanged.
+        assert_eq!(fx.slip_friction(1.2, 5.0), 1.2);
+        // β = 20 1/s by default: e^−1 after 50 ms.
+        assert!((fx.slippage_decay(0.05) - (-1.0f64).exp()).abs() < 1e-12);
     }
 }

@@ -229,6 +229,8 @@ struct Run<'a> {
     drag_per_s: Vec<f64>,
     /// Drag rate of the `vegetation_drag_kg_s` effect on any ground, 1/s.
     vegetation_drag_per_s: f64,
+    /// The slippage of the `slip_friction_max_deg` effect, m: the distance travelled in contact, decaying in flight.
+    slippage_m: f64,
     contacts: Vec<Contact>,
     previous: Vec<Contact>,
     scratch: Scratch,
@@ -299,6 +301,7 @@ impl<'a> Run<'a> {
                 })
                 .collect(),
             vegetation_drag_per_s: params.effects.vegetation_drag_per_s(rock.mass_kg),
+            slippage_m: 0.0,
             contacts: Vec::with_capacity(16),
             previous: Vec::with_capacity(16),
             scratch: Scratch::default(),
@@ -403,6 +406,7 @@ impl<'a> Run<'a> {
             self.s.position_m = x0 + v0 * tk + GRAVITY * (0.5 * tk * tk);
             self.s.velocity_mps = v0 + GRAVITY * tk;
             self.t += dt;
+            self.slippage_m *= self.params.effects.slippage_decay(dt);
             match self.cross_barriers(from, observer) {
                 BarrierEffect::Caught => return true,
                 BarrierEffect::Slowed => {
@@ -541,6 +545,11 @@ impl<'a> Run<'a> {
         }
         std::mem::swap(&mut self.previous, &mut self.contacts);
         self.t += h;
+        if in_contact {
+            self.slippage_m += h * self.s.velocity_mps.norm();
+        } else {
+            self.slippage_m *= self.params.effects.slippage_decay(h);
+        }
         in_contact
     }
 
@@ -595,7 +604,11 @@ impl<'a> Run<'a> {
             }
             let Some((depth, mut normal, triangle)) = surface.penetration(&p) else { continue };
             let m = self.terrain.triangle_material[triangle as usize] as usize;
-            let (mu_static, mu_dynamic) = self.friction[m];
+            let (mut mu_static, mut mu_dynamic) = self.friction[m];
+            if effects.slip_friction_max_deg.is_some() {
+                mu_dynamic = effects.slip_friction(mu_dynamic, self.slippage_m);
+                mu_static = mu_static.max(mu_dynamic);
+            }
             let new = !self.touching[i];
             let mut cr = self.cr[m];
             if new && self.params.cr_draw == CrDraw::PerImpact {
