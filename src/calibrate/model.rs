@@ -138,6 +138,39 @@ pub trait Prepared: Sync {
     }
 }
 
+/// How a model releases its simulated rocks and reads them as the field measured them: the settings both engines'
+/// bindings share.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Reading {
+    /// Releases of a simulated rock, at most ([`super::config::CalibrationConfig::release_attempts`]; 1 by default).
+    pub release_attempts: usize,
+    /// Measure each simulated path's rebound height (only a tracked run needs it; by default: if a run has one; it
+    /// makes a 2DLM simulation about a third slower).
+    pub rebounds: bool,
+    /// Read the bounces of each simulated path of a run whose track shows bounces with a tangential restitution,
+    /// for the bounce score (off by default; a campaign read from files turns it on in 2DLM unless the settings give
+    /// `bounce_weight = 0`, in 3DRB only where they give a positive `bounce_weight`, since it records every such
+    /// simulation's path every millisecond).
+    pub bounce_reads: bool,
+    /// The tracking error's sd, m, when simulated paths are read as the tracks were (`track_noise_m`).
+    pub track_noise_m: Option<f64>,
+    /// The survey's error on each rest point coordinate, sd in m (`rest_noise_m`).
+    pub rest_noise_m: Option<f64>,
+}
+
+impl Reading {
+    /// The defaults for `runs`: one release, rebound heights measured where a run has an observed one.
+    pub fn for_runs(runs: &[FieldRun]) -> Reading {
+        Reading {
+            release_attempts: 1,
+            rebounds: runs.iter().any(|r| r.rebound_height_m.is_some()),
+            bounce_reads: false,
+            track_noise_m: None,
+            rest_noise_m: None,
+        }
+    }
+}
+
 /// An engine bound to a campaign.
 pub trait Model: Sync {
     /// Which engine.
@@ -154,18 +187,22 @@ pub trait Model: Sync {
     fn dominant_material(&self, region: &super::params::Region) -> String;
     /// Where residual maps go.
     fn map_frame(&self) -> MapFrame;
+    /// How the model releases and reads its simulations.
+    fn reading(&self) -> &Reading;
     /// Releases of a simulated rock, at most ([`super::config::CalibrationConfig::release_attempts`]).
-    fn release_attempts(&self) -> usize;
+    fn release_attempts(&self) -> usize {
+        self.reading().release_attempts
+    }
     /// The declared tracking noise under which simulated paths of tracked runs are read, m
     /// ([`super::config::CalibrationConfig::track_noise_m`] for a campaign read from files, the case's own for a
     /// synthetic one).
     fn track_noise_m(&self) -> Option<f64> {
-        None
+        self.reading().track_noise_m
     }
     /// The declared survey error of each rest point coordinate, sd in m, with which simulated rest points are read
     /// ([`super::config::CalibrationConfig::rest_noise_m`]; [`as_measured`]).
     fn rest_noise_m(&self) -> Option<f64> {
-        None
+        self.reading().rest_noise_m
     }
     /// The bounces of `track` (campaign frame) over this model's ground, read under height noise of sd `noise_m`
     /// ([`super::impacts::read_impacts`]); none where the model has no ground to read them on.
@@ -173,9 +210,9 @@ pub trait Model: Sync {
         Vec::new()
     }
     /// True if the simulations of a tracked run read their bounces as its track was
-    /// ([`PathSummary::tangential_restitutions`], for the bounce score); false by default.
+    /// ([`PathSummary::tangential_restitutions`], for the bounce score).
     fn reads_bounces(&self) -> bool {
-        false
+        self.reading().bounce_reads
     }
     /// The material parameters the tracks of runs `which` measure directly ([`super::measured`]); none by default.
     fn measured_by_tracks(&self, _which: &[usize]) -> Vec<super::measured::Measured> {

@@ -6,7 +6,7 @@ use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::impacts::{read_impacts, tangential_restitutions_as_tracked, Impact};
 use super::measured::{Measured, MIN_BOUNCES_MEASURED};
-use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
+use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Reading, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
 use super::rebound::{attach_tracks, rebound_meter, ReboundMeter};
 use super::runs::FieldRun;
@@ -29,18 +29,7 @@ pub struct Model2d {
     profile: Profile,
     materials: Vec<String>,
     options: Options2d,
-    release_attempts: usize,
-    /// Measure each simulated path's rebound height (only a tracked run needs it; it makes a 2DLM simulation about
-    /// a third slower).
-    rebounds: bool,
-    /// Read the bounces of each simulated path of a run whose track shows bounces with a tangential restitution,
-    /// for the bounce score (on where a run has such bounces, unless the settings give `bounce_weight = 0`:
-    /// [`Model2d::with_bounce_reads`]; the path is recorded during the simulation).
-    bounce_reads: bool,
-    /// The tracking error's sd, m, when simulated paths are read as the tracks were (`track_noise_m`).
-    track_noise_m: Option<f64>,
-    /// The survey's error on each rest point coordinate, sd in m (`rest_noise_m`).
-    rest_noise_m: Option<f64>,
+    reading: Reading,
     /// The campaign folder and the profile file, for [`Model::scenario_files`] (`None` when built from parts).
     files: Option<(PathBuf, PathBuf)>,
 }
@@ -87,32 +76,20 @@ impl Model2d {
             }
         }
         let materials = profile.material_names().to_vec();
-        let rebounds = runs.iter().any(|r| r.rebound_height_m.is_some());
-        Ok(Model2d {
-            runs,
-            group_names,
-            profile,
-            materials,
-            options,
-            release_attempts: 1,
-            rebounds,
-            bounce_reads: false,
-            track_noise_m: None,
-            rest_noise_m: None,
-            files: None,
-        })
+        let reading = Reading::for_runs(&runs);
+        Ok(Model2d { runs, group_names, profile, materials, options, reading, files: None })
     }
 
     /// The model measuring every simulated path's rebound height, or not (by default: if a run is tracked).
     pub fn with_rebounds(mut self, on: bool) -> Model2d {
-        self.rebounds = on;
+        self.reading.rebounds = on;
         self
     }
 
     /// The model reading the bounces of the simulated paths of runs whose tracks show bounces with a tangential
     /// restitution, for the bounce score, or not (by default: if a run's track shows one).
     pub fn with_bounce_reads(mut self, on: bool) -> Model2d {
-        self.bounce_reads = on && self.runs.iter().any(FieldRun::has_tangential_bounce);
+        self.reading.bounce_reads = on && self.runs.iter().any(FieldRun::has_tangential_bounce);
         self
     }
 
@@ -127,9 +104,9 @@ impl Model2d {
         tracks: &BTreeMap<String, Vec<TrackPoint>>,
         track_noise_m: Option<f64>,
     ) -> Result<Model2d> {
-        self.track_noise_m = track_noise_m;
+        self.reading.track_noise_m = track_noise_m;
         let profile = &self.profile;
-        self.rebounds |= attach_tracks(
+        self.reading.rebounds |= attach_tracks(
             &mut self.runs,
             tracks,
             track_noise_m,
@@ -141,13 +118,13 @@ impl Model2d {
 
     /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model2d::from_parts`]).
     pub fn with_release_attempts(mut self, attempts: usize) -> Model2d {
-        self.release_attempts = attempts;
+        self.reading.release_attempts = attempts;
         self
     }
 
     /// The model with [`CalibrationConfig::rest_noise_m`] set (none by [`Model2d::from_parts`]).
     pub fn with_rest_noise(mut self, rest_noise_m: Option<f64>) -> Model2d {
-        self.rest_noise_m = rest_noise_m;
+        self.reading.rest_noise_m = rest_noise_m;
         self
     }
 
@@ -233,6 +210,10 @@ impl Model for Model2d {
         &self.materials
     }
 
+    fn reading(&self) -> &Reading {
+        &self.reading
+    }
+
     fn release_height_m(&self, run: &FieldRun) -> f64 {
         self.profile.z_at(run.release_m[0]).map(|z| run.release_m[2] - z).unwrap_or(0.0).max(0.0)
     }
@@ -250,18 +231,6 @@ impl Model for Model2d {
         self.materials[best].clone()
     }
 
-    fn release_attempts(&self) -> usize {
-        self.release_attempts
-    }
-
-    fn track_noise_m(&self) -> Option<f64> {
-        self.track_noise_m
-    }
-
-    fn rest_noise_m(&self) -> Option<f64> {
-        self.rest_noise_m
-    }
-
     fn map_frame(&self) -> MapFrame {
         let (x0, x1) = self.profile.x_range_m();
         MapFrame { dem: None, extent_m: [x0, -0.5, x1, 0.5], cell_m: ((x1 - x0) / 100.0).max(0.5), profile: true }
@@ -269,10 +238,6 @@ impl Model for Model2d {
 
     fn read_impacts(&self, track: &[TrackPoint], noise_m: f64) -> Vec<Impact> {
         profile_impacts(&self.profile, track, noise_m)
-    }
-
-    fn reads_bounces(&self) -> bool {
-        self.bounce_reads
     }
 
     /// Rt of each material from the tangential restitutions of the observed bounces on it.
@@ -367,8 +332,9 @@ impl Prepared for Prepared2d<'_> {
 
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
         let profile = self.slope.profile();
-        let meter = self.model.rebounds.then(|| rebound_meter(self.model.track_noise_m, run, repeat, seed));
-        let read_bounces = self.model.bounce_reads && run.has_tangential_bounce();
+        let meter =
+            self.model.reading.rebounds.then(|| rebound_meter(self.model.reading.track_noise_m, run, repeat, seed));
+        let read_bounces = self.model.reading.bounce_reads && run.has_tangential_bounce();
         let mut obs = PathObserver2d::new(profile, meter, read_bounces);
         let r = simulate_run(&self.slope, &self.options, run, repeat, seed, &mut obs);
         let mut summary = obs.summary;

@@ -5,7 +5,7 @@
 use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::impacts::{read_impacts, tangential_restitutions_as_tracked};
-use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Sim};
+use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Reading, Sim};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
 use super::rebound::{attach_tracks, rebound_meter, ReboundMeter};
 use super::runs::FieldRun;
@@ -34,17 +34,7 @@ pub struct Model3d {
     sim: SimParams,
     dem: Option<Grid>,
     median_mass_kg: f64,
-    release_attempts: usize,
-    /// Measure each simulated path's rebound height (only a tracked run needs it).
-    rebounds: bool,
-    /// Read the bounces of each simulated path of a run whose track shows bounces with a tangential restitution,
-    /// for the bounce score (off unless asked for: [`Model3d::with_bounce_reads`]; it records every such
-    /// simulation's path every millisecond).
-    bounce_reads: bool,
-    /// The tracking error's sd, m, when simulated paths are read as the tracks were (`track_noise_m`).
-    track_noise_m: Option<f64>,
-    /// The survey's error on each rest point coordinate, sd in m (`rest_noise_m`).
-    rest_noise_m: Option<f64>,
+    reading: Reading,
     /// The campaign folder and the terrain as read, for [`Model::scenario_toml`] (`None` when built from parts).
     files: Option<(std::path::PathBuf, TerrainSpec)>,
 }
@@ -127,7 +117,7 @@ impl Model3d {
     /// restitution, for the bounce score, or not (the default: a 3DRB model scores its bounces only where the
     /// settings give `bounce_weight`).
     pub fn with_bounce_reads(mut self, on: bool) -> Model3d {
-        self.bounce_reads = on && self.runs.iter().any(FieldRun::has_tangential_bounce);
+        self.reading.bounce_reads = on && self.runs.iter().any(FieldRun::has_tangential_bounce);
         self
     }
 
@@ -162,23 +152,8 @@ impl Model3d {
         let mut masses: Vec<f64> = runs.iter().map(|r| r.mass_kg).collect();
         masses.sort_by(|a, b| a.total_cmp(b));
         let median_mass_kg = masses.get(masses.len() / 2).copied().unwrap_or(100.0);
-        let rebounds = runs.iter().any(|r| r.rebound_height_m.is_some());
-        Ok(Model3d {
-            runs,
-            group_names,
-            materials,
-            terrain,
-            bodies,
-            sim,
-            dem,
-            median_mass_kg,
-            release_attempts: 1,
-            rebounds,
-            bounce_reads: false,
-            track_noise_m: None,
-            rest_noise_m: None,
-            files: None,
-        })
+        let reading = Reading::for_runs(&runs);
+        Ok(Model3d { runs, group_names, materials, terrain, bodies, sim, dem, median_mass_kg, reading, files: None })
     }
 
     /// The model with the tracked paths `tracks` (by run id, in the campaign's frame) attached: each tracked run gets
@@ -192,9 +167,9 @@ impl Model3d {
         tracks: &BTreeMap<String, Vec<TrackPoint>>,
         track_noise_m: Option<f64>,
     ) -> Result<Model3d> {
-        self.track_noise_m = track_noise_m;
+        self.reading.track_noise_m = track_noise_m;
         let terrain = &self.terrain;
-        self.rebounds |= attach_tracks(
+        self.reading.rebounds |= attach_tracks(
             &mut self.runs,
             tracks,
             track_noise_m,
@@ -209,13 +184,13 @@ impl Model3d {
 
     /// The model with [`CalibrationConfig::release_attempts`] set (1 by [`Model3d::from_parts`]).
     pub fn with_release_attempts(mut self, attempts: usize) -> Model3d {
-        self.release_attempts = attempts;
+        self.reading.release_attempts = attempts;
         self
     }
 
     /// The model with [`CalibrationConfig::rest_noise_m`] set (none by [`Model3d::from_parts`]).
     pub fn with_rest_noise(mut self, rest_noise_m: Option<f64>) -> Model3d {
-        self.rest_noise_m = rest_noise_m;
+        self.reading.rest_noise_m = rest_noise_m;
         self
     }
 
@@ -277,6 +252,10 @@ impl Model for Model3d {
         &self.materials
     }
 
+    fn reading(&self) -> &Reading {
+        &self.reading
+    }
+
     fn release_height_m(&self, run: &FieldRun) -> f64 {
         let p = to_local(&self.terrain, run.release_m);
         self.terrain.surface.height(p.x, p.y).map(|z| p.z - z).unwrap_or(0.0)
@@ -320,22 +299,6 @@ impl Model for Model3d {
         let base = self.dem.as_ref().map(|g| g.cell_x_m).unwrap_or(spacing);
         let cell = base.max((extent[2] - extent[0]).max(extent[3] - extent[1]) / 50.0);
         MapFrame { dem: self.dem.clone(), extent_m: extent, cell_m: cell, profile: false }
-    }
-
-    fn release_attempts(&self) -> usize {
-        self.release_attempts
-    }
-
-    fn track_noise_m(&self) -> Option<f64> {
-        self.track_noise_m
-    }
-
-    fn rest_noise_m(&self) -> Option<f64> {
-        self.rest_noise_m
-    }
-
-    fn reads_bounces(&self) -> bool {
-        self.bounce_reads
     }
 
     fn read_impacts(&self, track: &[TrackPoint], noise_m: f64) -> Vec<super::impacts::Impact> {
@@ -533,7 +496,7 @@ impl Observer for PathRecorder3d<'_> {
 
 impl Prepared for Prepared3d<'_> {
     fn simulate(&self, run: &FieldRun, repeat: usize, seed: u64) -> Sim {
-        if !(self.model.bounce_reads && run.has_tangential_bounce()) {
+        if !(self.model.reading.bounce_reads && run.has_tangential_bounce()) {
             return self.simulate_observed(run, repeat, seed, &mut ());
         }
         let mut rec = PathRecorder3d::new(&self.terrain);
@@ -561,7 +524,8 @@ impl Prepared3d<'_> {
         let v = terrain.up.to_internal(run.velocity_mps);
         let w = terrain.up.to_internal(run.spin_radps);
         let start = measured_release(terrain, body, p, v, w, &mut rng);
-        let meter = self.model.rebounds.then(|| rebound_meter(self.model.track_noise_m, run, repeat, seed));
+        let meter =
+            self.model.reading.rebounds.then(|| rebound_meter(self.model.reading.track_noise_m, run, repeat, seed));
         let mut obs = PathObserver3d::new(terrain, meter);
         let out = simulate(terrain, body, start, &self.sim, &mut rng, &mut (&mut obs, extra));
         let end = out.final_state.position_m;

@@ -295,11 +295,8 @@ impl Model for NullModel<'_> {
     fn map_frame(&self) -> MapFrame {
         self.inner.map_frame()
     }
-    fn release_attempts(&self) -> usize {
-        self.inner.release_attempts()
-    }
-    fn track_noise_m(&self) -> Option<f64> {
-        self.inner.track_noise_m()
+    fn reading(&self) -> &super::model::Reading {
+        self.inner.reading()
     }
     fn prepare<'a>(
         &'a self,
