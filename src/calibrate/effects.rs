@@ -187,7 +187,7 @@ const SLIP_3D: EffectDef = EffectDef {
     grid: &[30.0, 40.0, 50.0, 63.0],
     bounds: (0.0, 85.0),
     signature: &["gentle_fraction", "end_slope_deg", "path_slope_mean_deg"],
-    formula: "mu(s) = mu_min + (2/pi)(mu_max - mu_min) atan(kappa s), s the distance travelled in contact, decaying as exp(-beta t) in flight; mu_min the dynamic friction, mu_max = tan(max_deg), kappa 0.7 1/m, beta 20 1/s (RAMMS, Leine et al. 2014 eqs. 46-47, physics.md §2)",
+    formula: "mu(s) = mu_min + (2/pi)(mu_max - mu_min) atan(kappa s), s the distance travelled in contact, decaying as exp(-beta t) in flight; mu_min the dynamic friction, mu_max = tan(max_deg) (never below mu_min), kappa 0.7 1/m, beta 20 1/s (RAMMS, Leine et al. 2014 eqs. 46-47, physics.md §2)",
 };
 
 const ZONE: EffectDef = EffectDef {

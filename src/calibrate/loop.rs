@@ -610,7 +610,6 @@ fn refit_cv(
     Ok(errors)
 }
 
-/// The effects whose signature shows, strongest first.
 /// The effects the loop may propose: those listed in `candidates`, or, when none are, those proposed by default.
 fn allowed_effects(cfg: &CalibrationConfig, kind: ModelKind) -> Vec<&'static EffectDef> {
     let listed = &cfg.effects.candidates;
@@ -620,6 +619,7 @@ fn allowed_effects(cfg: &CalibrationConfig, kind: ModelKind) -> Vec<&'static Eff
         .collect()
 }
 
+/// The effects whose signature shows, strongest first.
 fn propose(
     ctx: &Context,
     allowed: &[&'static EffectDef],
