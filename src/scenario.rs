@@ -483,7 +483,8 @@ impl ScenarioFile {
         }
         file.hazard_zones.check(&f("hazard_zones"))?;
         file.barrier_design.check(&f("barrier_design"))?;
-        let this = file;
+        let mut this = file;
+        this.simulation.params.effects.fill_defaults();
         let shapes = match &this.rocks {
             Some(r) => r.check(&f("rocks"), base)?,
             None if this.sources.iter().all(|s| s.kind == SourceKind::Campaign) => Vec::new(),

@@ -112,6 +112,13 @@ impl SimParams {
     }
 }
 
+/// κ of the slippage-dependent friction by default, 1/m (Leine et al. 2014's demonstration set).
+pub const SLIP_KAPPA_PER_M: f64 = 0.7;
+/// β of the slippage-dependent friction by default, 1/s (Leine et al. 2014's demonstration set).
+pub const SLIP_DECAY_PER_S: f64 = 20.0;
+/// Reference mass of the mass-dependent restitution by default, kg.
+pub const MASS_REFERENCE_KG: f64 = 100.0;
+
 /// Effects the base 3DRB model lacks (physics.md §4), each off by default (`None`). The calibration loop switches
 /// them on one at a time when the residuals point at them.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -125,7 +132,7 @@ pub struct Effects {
     pub angle_restitution_exponent: Option<f64>,
     /// Restitution scales with mass (physics.md §8, f_m): Cr' = min(1, Cr·(m/m_ref)^−β), with β this exponent.
     pub mass_restitution_exponent: Option<f64>,
-    /// Reference mass of `mass_restitution_exponent`, kg (default: 100).
+    /// Reference mass of `mass_restitution_exponent`, kg (default [`MASS_REFERENCE_KG`]).
     pub mass_reference_kg: Option<f64>,
     /// Ground roughness felt relative to rock size (PlatRock, physics.md §4): at each impact the contact normal
     /// tilts by U(0, 1)·atan(rough/R) toward a random azimuth, R the equivalent radius; this value is `rough`, m.
@@ -149,9 +156,9 @@ pub struct Effects {
     /// slides far meets more friction than one that bounces. μ_min is the material's dynamic friction (tan φ_d, as
     /// drawn for the rock); this value is atan(μ_max) in degrees (μ_max below μ_min leaves friction unchanged).
     pub slip_friction_max_deg: Option<f64>,
-    /// κ of `slip_friction_max_deg`, 1/m (default 0.7, Leine's demonstration set).
+    /// κ of `slip_friction_max_deg`, 1/m (default [`SLIP_KAPPA_PER_M`]).
     pub slip_friction_kappa_per_m: Option<f64>,
-    /// β of `slip_friction_max_deg`, 1/s (default 20, Leine's demonstration set).
+    /// β of `slip_friction_max_deg`, 1/s (default [`SLIP_DECAY_PER_S`]).
     pub slip_friction_decay_per_s: Option<f64>,
 }
 
@@ -191,13 +198,25 @@ impl Effects {
         check("slip_friction_decay_per_s", self.slip_friction_decay_per_s, 0.0, 1e4)
     }
 
+    /// Writes the defaults of the effects that are on into their unset companions (κ and β of the slippage
+    /// friction, the mass restitution's reference mass), so that a run's manifest shows every value it used.
+    pub fn fill_defaults(&mut self) {
+        if self.slip_friction_max_deg.is_some() {
+            self.slip_friction_kappa_per_m.get_or_insert(SLIP_KAPPA_PER_M);
+            self.slip_friction_decay_per_s.get_or_insert(SLIP_DECAY_PER_S);
+        }
+        if self.mass_restitution_exponent.is_some() {
+            self.mass_reference_kg.get_or_insert(MASS_REFERENCE_KG);
+        }
+    }
+
     /// The friction coefficient after `slip_friction_max_deg` for a rock with dynamic friction coefficient `mu_min`
     /// and slippage `slippage_m` (`mu_min` when off).
     pub fn slip_friction(&self, mu_min: f64, slippage_m: f64) -> f64 {
         match self.slip_friction_max_deg {
             Some(max_deg) => {
                 let mu_max = max_deg.to_radians().tan().max(mu_min);
-                let kappa = self.slip_friction_kappa_per_m.unwrap_or(0.7);
+                let kappa = self.slip_friction_kappa_per_m.unwrap_or(SLIP_KAPPA_PER_M);
                 mu_min + std::f64::consts::FRAC_2_PI * (mu_max - mu_min) * (kappa * slippage_m).atan()
             }
             None => mu_min,
@@ -206,7 +225,7 @@ impl Effects {
 
     /// The factor by which the slippage of `slip_friction_max_deg` decays over `h` seconds in flight.
     pub fn slippage_decay(&self, h: f64) -> f64 {
-        (-self.slip_friction_decay_per_s.unwrap_or(20.0) * h).exp()
+        (-self.slip_friction_decay_per_s.unwrap_or(SLIP_DECAY_PER_S) * h).exp()
     }
 
     /// The drag rate of `vegetation_drag_kg_s` on a rock of `mass_kg`, 1/s (0 when off).
@@ -225,7 +244,7 @@ impl Effects {
             e *= (angle_deg.max(5.0) / 30.0).powf(-a);
         }
         if let Some(b) = self.mass_restitution_exponent {
-            e *= (mass_kg / self.mass_reference_kg.unwrap_or(100.0)).powf(-b);
+            e *= (mass_kg / self.mass_reference_kg.unwrap_or(MASS_REFERENCE_KG)).powf(-b);
         }
         e.clamp(0.0, 1.0)
     }
@@ -248,5 +267,14 @@ mod tests {
         assert_eq!(fx.slip_friction(1.2, 5.0), 1.2);
         // β = 20 1/s by default: e^−1 after 50 ms.
         assert!((fx.slippage_decay(0.05) - (-1.0f64).exp()).abs() < 1e-12);
+        // A manifest shows the defaults it used, and nothing for an effect that is off.
+        let mut shown = fx.clone();
+        shown.fill_defaults();
+        assert_eq!((shown.slip_friction_kappa_per_m, shown.slip_friction_decay_per_s), (Some(0.7), Some(20.0)));
+        assert_eq!(shown.mass_reference_kg, None);
+        assert_eq!(shown.slip_friction(0.4, 2.0), fx.slip_friction(0.4, 2.0));
+        let mut none = Effects::default();
+        none.fill_defaults();
+        assert_eq!(none, Effects::default());
     }
 }
