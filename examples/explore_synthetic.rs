@@ -4,8 +4,8 @@
 //! with a ratio above 0.7 cannot show a 30 % cut however good the loop is.
 //!
 //! Run: cargo run --release --example explore_synthetic [-- NAME ...]   (2d_control_a 2d_control_b 2d_speed_steep
-//! 2d_speed 2d_size 2d_zone speed speed_mixed size size_drag zone slip control_a control_b control_c control_d control_e
-//! 3d_designs; mixed_designs [rivals] [DESIGN ...]; tracks [speed speed_mixed thrown3]; crps_noise; track_noise;
+//! 2d_speed 2d_size 2d_zone speed speed_mixed size size_drag zone slip control_a control_b control_c control_d
+//! control_e 3d_designs; mixed_designs [rivals] [DESIGN ...]; tracks [speed speed_mixed thrown3]; crps_noise; track_noise;
 //! default: all but 3d_designs, mixed_designs, tracks, crps_noise and track_noise; the 3DRB ones take about a minute
 //! each on 2 cores, 3d_designs 15 minutes, mixed_designs 7 minutes, tracks 4 minutes a design)
 use talus::calibrate::config::Objective;

@@ -1,8 +1,8 @@
 //! The Tschamut campaign simulated under parameters you give, per block and over all runs: observed and simulated
 //! mean run-out, bias, run-out MAE, W1 and coverage (20 repeats per run, all 80 runs; bias, W1 and coverage each
 //! beside what the runs would show were the model right, `talus::calibrate::metrics`), the mean width of a run's
-//! simulated 5-95 % range and the observed run-outs' sd within a release group. For looking at what a parameter or an effect does to each
-//! block without a calibration. The last column is the share of simulations that run farther than every observed
+//! simulated 5-95 % range and the observed run-outs' sd within a release group. For looking at what a parameter or
+//! an effect does to each block without a calibration. The last column is the share of simulations that run farther than every observed
 //! run of their release group (the zone check's overrun share; about 1/(n+1) for a group of n runs if the model
 //! were right); `stalled` is the share of simulations that end within 1 m of their release.
 //!

@@ -109,7 +109,7 @@ pub fn metrics(runs: &[FieldRun], sims: &[RunSims]) -> Metrics {
         abs_err.push((s.median_runout() - r.runout_m).abs());
         let [mx, my] = s.median_rest_xy();
         end_err.push((mx - r.rest_m[0]).hypot(my - r.rest_m[1]));
-        if r.runout_m >= s.runout_quantile(0.05) && r.runout_m <= s.runout_quantile(0.95) {
+        if in_90_range(&sorted(&s.runouts()), r.runout_m) {
             covered += 1;
         }
         not_stopped += s.sims.iter().filter(|x| !x.stopped).count();
@@ -165,6 +165,11 @@ pub fn scatter_floor(runs: &[FieldRun], which: &[usize]) -> f64 {
     mean(&which.iter().map(|&i| (runs[i].runout_m - med[&runs[i].group]).abs()).collect::<Vec<_>>())
 }
 
+/// True if `y` lies within the 5-95 % range of the ascending sample `s` (what `coverage_90` counts).
+fn in_90_range(s: &[f64], y: f64) -> bool {
+    y >= quantile_sorted(s, 0.05) && y <= quantile_sorted(s, 0.95)
+}
+
 /// [W1, coverage_90, RMS bias] were the model right: one simulation per run stands in for the field run (in draw d
 /// run i's simulation (d + i) mod R) against the other simulations, over R draws (R the fewest simulations of a
 /// run; NaN below 2). See the module's "Were the model right".
@@ -179,10 +184,10 @@ pub fn were_the_model_right(sims: &[RunSims]) -> [f64; 3] {
         for (i, s) in sims.iter().enumerate() {
             let pick = (d + i) % s.sims.len();
             let stand_in = s.sims[pick].runout_m;
-            let own: Vec<f64> =
+            let mut own: Vec<f64> =
                 s.sims.iter().enumerate().filter(|&(j, _)| j != pick).map(|(_, x)| x.runout_m).collect();
-            let own = sorted(&own);
-            covered += usize::from(stand_in >= quantile_sorted(&own, 0.05) && stand_in <= quantile_sorted(&own, 0.95));
+            own.sort_by(f64::total_cmp);
+            covered += usize::from(in_90_range(&own, stand_in));
             stand_ins.push(stand_in);
             others.extend(own);
         }

@@ -406,7 +406,7 @@ impl<'a> Run<'a> {
             self.s.position_m = x0 + v0 * tk + GRAVITY * (0.5 * tk * tk);
             self.s.velocity_mps = v0 + GRAVITY * tk;
             self.t += dt;
-            self.slippage_m *= self.params.effects.slippage_decay(dt);
+            self.advance_slippage(false, dt);
             match self.cross_barriers(from, observer) {
                 BarrierEffect::Caught => return true,
                 BarrierEffect::Slowed => {
@@ -545,12 +545,22 @@ impl<'a> Run<'a> {
         }
         std::mem::swap(&mut self.previous, &mut self.contacts);
         self.t += h;
+        self.advance_slippage(in_contact, h);
+        in_contact
+    }
+
+    /// Advances the slippage of the `slip_friction_max_deg` effect over `h`: the distance travelled in contact, a
+    /// decay in flight (nothing when the effect is off).
+    fn advance_slippage(&mut self, in_contact: bool, h: f64) {
+        let effects = &self.params.effects;
+        if effects.slip_friction_max_deg.is_none() {
+            return;
+        }
         if in_contact {
             self.slippage_m += h * self.s.velocity_mps.norm();
         } else {
-            self.slippage_m *= self.params.effects.slippage_decay(h);
+            self.slippage_m *= effects.slippage_decay(h);
         }
-        in_contact
     }
 
     /// Rolling resistance (when on) and drag (the largest soft-ground rate among the touched materials plus the
