@@ -5,7 +5,7 @@
 //! others keep theirs), and a full report per case.
 //!
 //! Run: cargo run --release --example calibration_study [-- CASE ...]   (cases: speed speed_mixed size size_drag
-//! zone rough speed_tracked speed_mixed_tracked size_tracked speed_2 speed_3 speed_tracked_2 speed_tracked_3
+//! zone rough scar speed_tracked speed_mixed_tracked size_tracked speed_2 speed_3 speed_tracked_2 speed_tracked_3
 //! control_a_N control_b_N control_c_N control_d_N control_e_N control_a_tracked_N control_d_tracked_N 2d_speed
 //! 2d_speed_tracked 2d_control_a_tracked_N 2d_size 2d_zone 2d_control_a_N 2d_control_b_N, N = 1..3, a trailing *
 //! matches a prefix; default: all; STUDY_SEEDS=N runs the controls on seeds 1..=N; STUDY_CONFIG=FILE reads the
@@ -58,6 +58,8 @@ fn main() {
         "speed_tracked",
         "speed_mixed_tracked",
         "size_tracked",
+        // Its effect, `scar_drag`, is tried only when listed: STUDY_CONFIG must list it among `candidates`.
+        "scar",
     ]
     .into_iter()
     .map(|n| (n.to_string(), n, 1))

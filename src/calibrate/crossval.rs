@@ -3,6 +3,7 @@
 
 use super::metrics::{metrics_set, Metrics, MetricsSet};
 use super::model::RunSims;
+use super::report::{metrics_header, metrics_rows};
 use super::runs::{assign_groups, FieldRun};
 use super::{calibrate, runs, split, stats, CalibrationConfig, Model};
 use crate::error::{Error, Result};
@@ -295,33 +296,13 @@ fn cv_markdown(cv: &CrossValidation) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Outer {}-fold cross-validation ({})\n", cv.k, cv.model);
     let _ = writeln!(s, "Every run predicted once by the fold that did not see it; {:.0} s in all.\n", cv.total_s);
-    let _ = writeln!(
-        s,
-        "| model, runs | n | runout_mae_m | runout_w1_m | W1 if right | coverage_90 | coverage if right | runout_bias_m | bias if right | endpoint_mae_m | floor |"
-    );
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|");
-    let row = |s: &mut String, l: &str, m: &Metrics| {
-        let _ = writeln!(
-            s,
-            "| {l} | {} | {:.2} | {:.2} | {:.2} | {:.2} | {:.2} | {:+.2} | {:.2} | {:.2} | {:.2} |",
-            m.runs,
-            m.runout_mae_m,
-            m.runout_w1_m,
-            m.runout_w1_if_right_m,
-            m.coverage_90,
-            m.coverage_90_if_right,
-            m.runout_bias_m,
-            m.runout_bias_if_right_m,
-            m.endpoint_mae_m,
-            m.scatter_floor_mae_m
-        );
-    };
+    metrics_header(&mut s);
     let started_label = format!("final, without {} (not started)", cv.not_started.join(", "));
     let started = cv.final_started.as_ref().map(|set| (started_label.as_str(), set));
     for (name, set) in [("baseline", &cv.baseline), ("final", &cv.final_set)].into_iter().chain(started) {
-        row(&mut s, name, &set.overall);
+        metrics_rows(&mut s, name, &set.overall);
         for (b, m) in &set.by_block {
-            row(&mut s, &format!("{name}, block {b}"), m);
+            metrics_rows(&mut s, &format!("{name}, block {b}"), m);
         }
     }
     if !cv.not_started.is_empty() {

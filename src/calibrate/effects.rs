@@ -34,6 +34,8 @@ pub enum EffectKind {
     CrspRotation,
     /// RAMMS's slippage-dependent friction (3DRB; tried only when listed in `candidates` or declared).
     SlipFriction,
+    /// A drag quadratic in speed from scarring soft soil (3DRB; tried only when listed in `candidates` or declared).
+    ScarDrag,
 }
 
 /// What the loop knows about an effect.
@@ -90,7 +92,8 @@ pub fn recentring(kind: EffectKind) -> Recentring {
         | EffectKind::SoftDrag
         | EffectKind::VegetationDrag
         | EffectKind::Roughness
-        | EffectKind::SlipFriction => Recentring::DynamicFriction,
+        | EffectKind::SlipFriction
+        | EffectKind::ScarDrag => Recentring::DynamicFriction,
         EffectKind::Zone | EffectKind::CrspRotation => Recentring::Mobility,
     }
 }
@@ -190,6 +193,16 @@ const SLIP_3D: EffectDef = EffectDef {
     formula: "mu(s) = mu_min + (2/pi)(mu_max - mu_min) atan(kappa s), s the distance travelled in contact, decaying as exp(-beta t) in flight; mu_min the dynamic friction, mu_max = tan(max_deg) (never below mu_min), kappa 0.7 1/m, beta 20 1/s (RAMMS, Leine et al. 2014 eqs. 46-47, physics.md §2)",
 };
 
+const SCAR_3D: EffectDef = EffectDef {
+    kind: EffectKind::ScarDrag,
+    name: "scar_drag",
+    param: Some("coefficient"),
+    grid: &[0.01, 0.05, 0.2, 1.0],
+    bounds: (0.0, 10.0),
+    signature: &["release_height_m", "drop_height_m", "impact_speed_max_mps", "mass_kg", "size_m", OUTSIDE_RANGE],
+    formula: "in contact with the ground a force -(1/2) C rho pi R^2 |v| v, rho 1700 kg/m3, R the equivalent radius: speed and spin fall as v / (1 + k v t), k = (1/2) C rho pi R^2 / m, fast and light rocks slow most (after Lu et al. 2019's scarring drag (1/2) C_d rho A v^2, physics.md §2; C folds Lu's C_d and the share of the cross-section in the soil: ours)",
+};
+
 const ZONE: EffectDef = EffectDef {
     kind: EffectKind::Zone,
     name: "zone",
@@ -223,8 +236,8 @@ const CRSP_2D: EffectDef = EffectDef {
 
 /// The effects a model supports, in the order the loop considers them.
 pub fn effects_for(model: ModelKind) -> &'static [EffectDef] {
-    const D3: [EffectDef; 9] =
-        [SPEED_3D, ANGLE_3D, MASS_3D, ROUGH_3D, ROLL_3D, DRAG_3D, VEGETATION_DRAG_3D, ZONE, SLIP_3D];
+    const D3: [EffectDef; 10] =
+        [SPEED_3D, ANGLE_3D, MASS_3D, ROUGH_3D, ROLL_3D, DRAG_3D, VEGETATION_DRAG_3D, ZONE, SLIP_3D, SCAR_3D];
     const D2: [EffectDef; 4] = [SPEED_2D, MASS_2D, CRSP_2D, ZONE];
     match model {
         ModelKind::Rigid3d => &D3,
@@ -232,11 +245,12 @@ pub fn effects_for(model: ModelKind) -> &'static [EffectDef] {
     }
 }
 
-/// True if the loop tries `kind` when the settings list no `candidates`. Slippage-dependent friction is tried only
-/// when listed: at Tschamut it widens the run-outs instead of trimming their tail, and the synthetic study's
-/// controls have not been run with it (docs/calibration.md, "Slippage-dependent friction").
+/// True if the loop tries `kind` when the settings list no `candidates`. Slippage-dependent friction and the
+/// scarring drag are tried only when listed: at Tschamut slippage friction widens the run-outs instead of trimming
+/// their tail, and the synthetic study's controls have not been run with either (docs/calibration.md,
+/// "Slippage-dependent friction" and "Scarring drag").
 pub fn proposed_by_default(kind: EffectKind) -> bool {
-    kind != EffectKind::SlipFriction
+    !matches!(kind, EffectKind::SlipFriction | EffectKind::ScarDrag)
 }
 
 /// The definition of `kind` for `model`.

@@ -1029,16 +1029,17 @@ mod tests {
     }
 
     #[test]
-    fn slippage_friction_is_tried_only_when_listed() {
+    fn slippage_friction_and_scarring_drag_are_tried_only_when_listed() {
         let names = |cfg: &CalibrationConfig| {
             allowed_effects(cfg, ModelKind::Rigid3d).iter().map(|d| d.name).collect::<Vec<_>>()
         };
         let mut cfg = CalibrationConfig::default();
         let by_default = names(&cfg);
-        assert_eq!(by_default.len(), effects_for(ModelKind::Rigid3d).len() - 1);
-        assert!(!by_default.contains(&"slip_friction") && by_default.contains(&"rolling_resistance"));
-        cfg.effects.candidates = vec!["slip_friction".into(), "zone".into()];
-        assert_eq!(names(&cfg), ["zone", "slip_friction"]);
+        assert_eq!(by_default.len(), effects_for(ModelKind::Rigid3d).len() - 2);
+        assert!(!by_default.contains(&"slip_friction") && !by_default.contains(&"scar_drag"));
+        assert!(by_default.contains(&"rolling_resistance"));
+        cfg.effects.candidates = vec!["scar_drag".into(), "slip_friction".into(), "zone".into()];
+        assert_eq!(names(&cfg), ["zone", "slip_friction", "scar_drag"]);
     }
 
     #[test]

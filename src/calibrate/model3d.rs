@@ -361,6 +361,7 @@ impl Model3d {
                 EffectKind::RollingResistance => fx.rolling_resistance = Some(value(&e.label, "mu_r")?),
                 EffectKind::VegetationDrag => fx.vegetation_drag_kg_s = Some(value(&e.label, "c_kg_s")?),
                 EffectKind::SlipFriction => fx.slip_friction_max_deg = Some(value(&e.label, "max_deg")?),
+                EffectKind::ScarDrag => fx.scar_drag_coefficient = Some(value(&e.label, "coefficient")?),
                 EffectKind::SoftDrag => {
                     fx.soft_drag_per_s = Some(value(&e.label, "rate_per_s")?);
                     fx.soft_materials = e.material.iter().cloned().collect();

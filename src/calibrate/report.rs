@@ -527,7 +527,15 @@ fn distribution_aims(bias_m: f64, w1_m: f64, coverage: f64) -> [bool; 3] {
     [bias_m.abs() <= 3.0, w1_m < 5.0, (0.8..=0.97).contains(&coverage)]
 }
 
-fn metrics_rows(s: &mut String, label: &str, m: &Metrics) {
+/// The header of a table of [`metrics_rows`], with its legend above it.
+pub(super) fn metrics_header(s: &mut String) {
+    let _ = writeln!(s, "Run-out MAE, W1, bias and end-point MAE in metres; floor: the run-out MAE of the observed runs' own group median; W1, coverage and bias if right: what these runs would show were their field run-outs draws of the model itself (the mean; for the bias the root mean square: a small sample shows a W1 and a bias even against the true model, and a 5–95 % interval of R simulations holds about 0.9 (R − 1)/(R + 1) of further draws; docs/calibration.md); ✗: misses the aim of issue 5 (bias within ±3 m, W1 < 5 m, coverage 0.8–0.97, MAE within 20 % of the floor); ✗†: a right model would miss it too on these runs, on average, so the miss alone does not tell a wrong model from a right one.\n");
+    let _ = writeln!(s, "| model, runs | n | runout_mae_m | runout_w1_m | W1 if right | coverage_90 | coverage if right | runout_bias_m | bias if right | endpoint_mae_m | floor | MAE/floor |");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|");
+}
+
+/// One row of the metrics table under [`metrics_header`], each aim the row misses marked (nothing for no runs).
+pub(super) fn metrics_rows(s: &mut String, label: &str, m: &Metrics) {
     if m.runs == 0 {
         return;
     }
@@ -609,9 +617,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         );
     }
     let _ = writeln!(s, "## Errors\n");
-    let _ = writeln!(s, "Run-out MAE, W1, bias and end-point MAE in metres; floor: the run-out MAE of the observed runs' own group median; W1, coverage and bias if right: what these runs would show were their field run-outs draws of the model itself (the mean; for the bias the root mean square: a small sample shows a W1 and a bias even against the true model, and a 5–95 % interval of R simulations holds about 0.9 (R − 1)/(R + 1) of further draws; docs/calibration.md); ✗: misses the aim of issue 5 (bias within ±3 m, W1 < 5 m, coverage 0.8–0.97, MAE within 20 % of the floor); ✗†: a right model would miss it too on these runs, on average, so the miss alone does not tell a wrong model from a right one.\n");
-    let _ = writeln!(s, "| model, runs | n | runout_mae_m | runout_w1_m | W1 if right | coverage_90 | coverage if right | runout_bias_m | bias if right | endpoint_mae_m | floor | MAE/floor |");
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|");
+    metrics_header(&mut s);
     for (name, st) in [("baseline", &r.baseline), ("final", &r.final_stage)] {
         metrics_rows(&mut s, &format!("{name}, held-out"), &st.holdout);
         for (b, m) in &st.holdout_by_block {

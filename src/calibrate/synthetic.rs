@@ -44,6 +44,8 @@ pub enum Hidden {
     VegetationDrag(f64),
     /// RAMMS's slippage-dependent friction (3DRB), μ_max as an angle in degrees (κ and β at their defaults).
     SlipFriction(f64),
+    /// A scarring drag quadratic in speed in contact with the ground (3DRB), its coefficient C.
+    ScarDrag(f64),
 }
 
 impl Hidden {
@@ -56,6 +58,7 @@ impl Hidden {
             Hidden::MassRestitution(_) => Some(EffectKind::MassRestitution),
             Hidden::VegetationDrag(_) => Some(EffectKind::VegetationDrag),
             Hidden::SlipFriction(_) => Some(EffectKind::SlipFriction),
+            Hidden::ScarDrag(_) => Some(EffectKind::ScarDrag),
             Hidden::SoftZone(..) | Hidden::DragZone(..) => Some(EffectKind::Zone),
         }
     }
@@ -208,6 +211,10 @@ pub const TRUE_3D: [f64; 4] = [0.35, 0.05, 40.0, 32.0];
 ///   rocks over-run in the model because real slopes trap them"). A weaker drag hides in the blocks' scatter:
 ///   C = 20 or 50 kg/s on this design, or 5 to 40 kg/s on the `size` design, bound the cut at 0 (ratios
 ///   0.98–1.11, `explore_synthetic`), since a rolling boulder touches the ground only part of the time.
+/// - `scar` (with `control_e`): the same design hiding the scarring drag (`scar_drag`, C = 1): in contact a rock
+///   slows at k v², k = ½ C ρ π R² / m, from 2.0 /m for the 20 kg boulders to 0.5 /m for the 1200 kg ones, so it
+///   acts on the rocks rolling fast down the slope and onto the plain, and lets the slow ones roll on. Tried only
+///   when listed in `candidates` (the study's settings must list it).
 pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
     if let Some(base) = name.strip_suffix("_tracked") {
         return case_3d(base, seed).map(|s| Synthetic3d { track_noise_m: Some(TRACK_NOISE_M), ..s });
@@ -248,6 +255,7 @@ pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
         "size_drag" => Synthetic3d { hidden: Hidden::VegetationDrag(200.0), ..flat },
         "control_e" => flat,
         "slip" => Synthetic3d { hidden: Hidden::SlipFriction(63.0), ..flat },
+        "scar" => Synthetic3d { hidden: Hidden::ScarDrag(1.0), ..flat },
         _ => return None,
     })
 }
@@ -356,6 +364,10 @@ pub fn truth_3d(spec: &Synthetic3d) -> Candidate {
             truth.params.set("hidden.max_deg", *max_deg);
             truth.effects.push(hidden_effect(EffectKind::SlipFriction));
         }
+        Hidden::ScarDrag(c) => {
+            truth.params.set("hidden.coefficient", *c);
+            truth.effects.push(hidden_effect(EffectKind::ScarDrag));
+        }
         Hidden::SoftZone(poly, [cr, s, d]) => add_zone_3d(&mut truth, poly, [*cr, 0.02, *s, *d], 0.0),
         Hidden::DragZone(poly, rate) => add_zone_3d(&mut truth, poly, spec.material, *rate),
     }
@@ -434,7 +446,8 @@ pub fn truth_2d(spec: &Synthetic2d) -> Candidate {
         | Hidden::Roughness(_)
         | Hidden::DragZone(..)
         | Hidden::VegetationDrag(_)
-        | Hidden::SlipFriction(_) => {}
+        | Hidden::SlipFriction(_)
+        | Hidden::ScarDrag(_) => {}
         Hidden::SpeedRestitution(k) => {
             truth.effects.push(hidden_effect(EffectKind::SpeedRestitution));
             truth.params.set("hidden.k_mps", *k);

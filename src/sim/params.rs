@@ -160,7 +160,17 @@ pub struct Effects {
     pub slip_friction_kappa_per_m: Option<f64>,
     /// β of `slip_friction_max_deg`, 1/s (default [`SLIP_DECAY_PER_S`]).
     pub slip_friction_decay_per_s: Option<f64>,
+    /// Scarring drag in soft soil, quadratic in speed (after Lu et al. 2019's F_d = ½ C_d ρ_Σ A |v|², physics.md
+    /// §2): while the rock touches the ground, a force −½ C ρ_Σ π R² |v| v with ρ_Σ = [`SCAR_SOIL_DENSITY_KG_M3`]
+    /// and R the equivalent radius, so that velocity and spin fall as v' = v / (1 + k |v| t), k = ½ C ρ_Σ π R² / m.
+    /// C is this value: Lu's C_d times the share of the rock's cross-section in the soil (ours: Lu's A(t) and
+    /// penetration depth folded into one fitted number). Fast rocks are slowed most; added to the other drags.
+    pub scar_drag_coefficient: Option<f64>,
 }
+
+/// Density of the scarred soil layer of `scar_drag_coefficient`, kg/m³ (Lu et al. 2019 at Chant Sura,
+/// physics.md §2).
+pub const SCAR_SOIL_DENSITY_KG_M3: f64 = 1700.0;
 
 impl Effects {
     /// True if no effect is on.
@@ -173,6 +183,7 @@ impl Effects {
             && self.soft_drag_per_s.is_none()
             && self.vegetation_drag_kg_s.is_none()
             && self.slip_friction_max_deg.is_none()
+            && self.scar_drag_coefficient.is_none()
     }
 
     /// Checks ranges; `prefix` is prepended to field names.
@@ -195,7 +206,8 @@ impl Effects {
         check("vegetation_drag_kg_s", self.vegetation_drag_kg_s, 0.0, 1e6)?;
         check("slip_friction_max_deg", self.slip_friction_max_deg, 0.0, 85.0)?;
         check("slip_friction_kappa_per_m", self.slip_friction_kappa_per_m, 1e-3, 1e3)?;
-        check("slip_friction_decay_per_s", self.slip_friction_decay_per_s, 0.0, 1e4)
+        check("slip_friction_decay_per_s", self.slip_friction_decay_per_s, 0.0, 1e4)?;
+        check("scar_drag_coefficient", self.scar_drag_coefficient, 0.0, 100.0)
     }
 
     /// Writes the defaults of the effects that are on into their unset companions (κ and β of the slippage
@@ -231,6 +243,15 @@ impl Effects {
     /// The drag rate of `vegetation_drag_kg_s` on a rock of `mass_kg`, 1/s (0 when off).
     pub fn vegetation_drag_per_s(&self, mass_kg: f64) -> f64 {
         self.vegetation_drag_kg_s.map_or(0.0, |c| c / mass_kg)
+    }
+
+    /// The rate k of `scar_drag_coefficient` for a rock of `mass_kg` and `volume_m3`, 1/m (0 when off): in
+    /// contact the speed falls as dv/dt = −k v².
+    pub fn scar_drag_per_m(&self, mass_kg: f64, volume_m3: f64) -> f64 {
+        self.scar_drag_coefficient.map_or(0.0, |c| {
+            let radius_m = (3.0 * volume_m3 / (4.0 * std::f64::consts::PI)).cbrt();
+            0.5 * c * SCAR_SOIL_DENSITY_KG_M3 * std::f64::consts::PI * radius_m * radius_m / mass_kg
+        })
     }
 
     /// The restitution coefficient after the restitution effects, for a contact approaching at `approach_mps`

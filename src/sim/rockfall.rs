@@ -229,6 +229,8 @@ struct Run<'a> {
     drag_per_s: Vec<f64>,
     /// Drag rate of the `vegetation_drag_kg_s` effect on any ground, 1/s.
     vegetation_drag_per_s: f64,
+    /// Rate of the quadratic `scar_drag_coefficient` effect on any ground, 1/m.
+    scar_drag_per_m: f64,
     /// The slippage of the `slip_friction_max_deg` effect, m: the distance travelled in contact, decaying in flight.
     slippage_m: f64,
     contacts: Vec<Contact>,
@@ -301,6 +303,7 @@ impl<'a> Run<'a> {
                 })
                 .collect(),
             vegetation_drag_per_s: params.effects.vegetation_drag_per_s(rock.mass_kg),
+            scar_drag_per_m: params.effects.scar_drag_per_m(rock.mass_kg, rock.volume_m3),
             slippage_m: 0.0,
             contacts: Vec::with_capacity(16),
             previous: Vec::with_capacity(16),
@@ -564,7 +567,7 @@ impl<'a> Run<'a> {
     }
 
     /// Rolling resistance (when on) and drag (the largest soft-ground rate among the touched materials plus the
-    /// vegetation drag) on a rock in contact over a step of `h`.
+    /// vegetation drag, then the scarring drag) on a rock in contact over a step of `h`.
     fn brake(&self, vel: &mut Velocities, h: f64) {
         let effects = &self.params.effects;
         if let Some(mu_r) = effects.rolling_resistance {
@@ -587,6 +590,12 @@ impl<'a> Run<'a> {
             + self.vegetation_drag_per_s;
         if c > 0.0 {
             let f = (-c * h).exp();
+            vel.linear_mps *= f;
+            vel.angular_body_radps *= f;
+        }
+        if self.scar_drag_per_m > 0.0 {
+            // dv/dt = −k v² over h, exactly: v' = v / (1 + k v h).
+            let f = 1.0 / (1.0 + self.scar_drag_per_m * vel.linear_mps.norm() * h);
             vel.linear_mps *= f;
             vel.angular_body_radps *= f;
         }
