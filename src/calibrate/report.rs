@@ -508,6 +508,15 @@ fn fmt(v: f64) -> String {
     }
 }
 
+/// [`fmt`] with the sign always shown (a bias).
+fn signed(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:+.2}")
+    } else {
+        "–".into()
+    }
+}
+
 /// Whether held-out metrics meet issue 5's aims: bias within ±3 m, W1 under 5 m, coverage in [0.8, 0.97], MAE
 /// within 20 % of the floor.
 pub fn aims(m: &Metrics) -> [bool; 4] {
@@ -557,7 +566,7 @@ pub(super) fn metrics_rows(s: &mut String, label: &str, m: &Metrics) {
         fmt(m.coverage_90),
         mark(2),
         fmt(m.coverage_90_if_right),
-        fmt(m.runout_bias_m),
+        signed(m.runout_bias_m),
         mark(0),
         fmt(m.runout_bias_if_right_m),
         fmt(m.endpoint_mae_m),
@@ -905,7 +914,7 @@ mod tests {
             coverage_90_if_right: 0.75,
             ..m0
         };
-        assert!(row(&b).contains("| 4.00 ✗† | 5.00 |") && row(&b).contains("| 0.70 ✗† | 0.75 |"), "{}", row(&b));
+        assert!(row(&b).contains("| +4.00 ✗† | 5.00 |") && row(&b).contains("| 0.70 ✗† | 0.75 |"), "{}", row(&b));
         assert_eq!(aims_if_right(&m0), [true, true, false]);
     }
 }
