@@ -31,6 +31,7 @@
 //! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
 //! # screen_repeats = 20     # simulations per run in the loop's grid screening (default: repeats)
 //! one_se_rule = true        # of the effects that pass, the simplest within one standard error of the best
+//! restart_arms = false     # each arm also tries its effect from the start point of the materials
 //! ```
 
 use super::effects::{by_name, effects_for};
@@ -252,6 +253,12 @@ pub struct EffectsConfig {
     /// Among the effects that pass, keep the one with the fewest added parameters whose out-of-fold CRPS is within
     /// one standard error of the best one's (default true; false: the largest cut, as until 2026-11-25).
     pub one_se_rule: bool,
+    /// Each arm of the grid screening also tries every value of its effect with the materials at the settings'
+    /// start point, not only re-centred around the current fit (default false; ours). Where the fit without the
+    /// effect sits far from the effect's own valley (the synthetic `scar`: Cr 0.02 at its bound), an arm re-centred
+    /// around it cannot reach that valley, and a rival effect that fits from there wins (docs/calibration.md,
+    /// "Scarring drag"). It adds one setting per effect value to every arm but the zone's.
+    pub restart_arms: bool,
 }
 
 impl Default for EffectsConfig {
@@ -269,6 +276,7 @@ impl Default for EffectsConfig {
             cv_refit_evaluations: None,
             screen_repeats: None,
             one_se_rule: true,
+            restart_arms: false,
         }
     }
 }

@@ -252,7 +252,7 @@ pub fn effects_loop(
                 };
                 let how = recentring(prop.def.kind);
                 let axis: &[f64] = if how == Recentring::CrScale { &CR_SCALE_GRID } else { &MOBILITY_GRID };
-                for v in values {
+                for &v in &values {
                     for &m in axis {
                         let mut c =
                             with_effect(model, &current, prop.def, &prop.label, prop.material.clone(), v, &centre);
@@ -261,6 +261,14 @@ pub fn effects_loop(
                             Recentring::DynamicFriction => scale_dynamic_friction(&mut c, m),
                             Recentring::Mobility => c.params.set(MOBILITY, m),
                         }
+                        arm.settings.push(ctx.sims(&screened(ctx, &c), cal, cfg.screen_repeats())?);
+                        arm.cands.push(c);
+                    }
+                }
+                if cfg.effects.restart_arms {
+                    let from = with_start_materials(ctx, &current);
+                    for &v in &values {
+                        let c = with_effect(model, &from, prop.def, &prop.label, prop.material.clone(), v, &centre);
                         arm.settings.push(ctx.sims(&screened(ctx, &c), cal, cfg.screen_repeats())?);
                         arm.cands.push(c);
                     }
@@ -608,6 +616,19 @@ fn refit_cv(
         }
     }
     Ok(errors)
+}
+
+/// `current` with every material parameter at the settings' start point (its effects and zones as they are).
+fn with_start_materials(ctx: &Context, current: &Candidate) -> Candidate {
+    let (start, _) = super::base_candidate(ctx.model, ctx.cfg);
+    let mut c = current.clone();
+    for m in ctx.model.materials() {
+        let prefix = format!("{m}.");
+        for (k, v) in start.params.0.iter().filter(|(k, _)| k.starts_with(&prefix)) {
+            c.params.set(k.clone(), *v);
+        }
+    }
+    c
 }
 
 /// The effects the loop may propose: those listed in `candidates`, or, when none are, those proposed by default.
@@ -1122,5 +1143,29 @@ mod tests {
         let free = CalibrationConfig::default();
         let ctx = Context::new(&model, &free, &quiet);
         assert_eq!(screened(&ctx, &c), c);
+    }
+
+    #[test]
+    fn a_restarted_arm_takes_the_materials_from_the_start_point_and_keeps_the_effects() {
+        use crate::calibrate::synthetic::{case_2d, synthetic_2d};
+        let model = synthetic_2d(&case_2d("control_a", 1).unwrap(), crate::lumped2d::Options2d::default()).unwrap();
+        let cfg = CalibrationConfig::default();
+        let quiet = |_: &str| {};
+        let ctx = Context::new(&model, &cfg, &quiet);
+        let (start, _) = crate::calibrate::base_candidate(&model, &cfg);
+        let mut fitted = start.clone();
+        fitted.params.set("ground.rn_mean", 0.02);
+        fitted.params.set("ground.friction_angle_deg", 60.0);
+        fitted.params.set("speed_restitution.k_mps", 9.0);
+        fitted.effects.push(crate::calibrate::params::EffectSpec {
+            kind: EffectKind::SpeedRestitution,
+            label: "speed_restitution".into(),
+            material: None,
+            region: None,
+        });
+        let out = with_start_materials(&ctx, &fitted);
+        assert_eq!(out.params.get("ground.rn_mean"), start.params.get("ground.rn_mean"));
+        assert_eq!(out.params.get("ground.friction_angle_deg"), start.params.get("ground.friction_angle_deg"));
+        assert_eq!((out.params.get("speed_restitution.k_mps"), out.effects.len()), (Some(9.0), 1));
     }
 }
