@@ -513,7 +513,7 @@ fn signed(v: f64) -> String {
     if v.is_finite() {
         format!("{v:+.2}")
     } else {
-        "–".into()
+        fmt(v)
     }
 }
 
