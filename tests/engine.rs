@@ -209,8 +209,8 @@ fn with_scarring_drag_a_sliding_block_stops_where_the_closed_form_says() {
     let start = resting_on_incline(&r, slope, 60.0, v0);
     let mut params = SimParams::default();
     params.effects.scar_drag_coefficient = Some(coefficient);
-    let k = params.effects.scar_drag_per_m(r.mass_kg, r.volume_m3);
     let radius_m = (3.0 * r.volume_m3 / (4.0 * std::f64::consts::PI)).cbrt();
+    let k = params.effects.scar_drag_per_m(r.mass_kg, r.equivalent_radius_m());
     assert_relative_eq!(k, 0.5 * coefficient * 1700.0 * std::f64::consts::PI * radius_m * radius_m / r.mass_kg);
     let out = simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut ());
     assert_eq!(out.stop_reason, StopReason::Stopped);

@@ -252,26 +252,26 @@ pub fn effects_loop(
                 };
                 let how = recentring(prop.def.kind);
                 let axis: &[f64] = if how == Recentring::CrScale { &CR_SCALE_GRID } else { &MOBILITY_GRID };
+                let effect = |from: &Candidate, v| {
+                    with_effect(model, from, prop.def, &prop.label, prop.material.clone(), v, &centre)
+                };
                 for &v in &values {
                     for &m in axis {
-                        let mut c =
-                            with_effect(model, &current, prop.def, &prop.label, prop.material.clone(), v, &centre);
+                        let mut c = effect(&current, v);
                         match how {
                             Recentring::CrScale => scale_cr(&mut c, m),
                             Recentring::DynamicFriction => scale_dynamic_friction(&mut c, m),
                             Recentring::Mobility => c.params.set(MOBILITY, m),
                         }
-                        arm.settings.push(ctx.sims(&screened(ctx, &c), cal, cfg.screen_repeats())?);
                         arm.cands.push(c);
                     }
                 }
                 if cfg.effects.restart_arms {
                     let from = with_start_materials(ctx, &current);
-                    for &v in &values {
-                        let c = with_effect(model, &from, prop.def, &prop.label, prop.material.clone(), v, &centre);
-                        arm.settings.push(ctx.sims(&screened(ctx, &c), cal, cfg.screen_repeats())?);
-                        arm.cands.push(c);
-                    }
+                    arm.cands.extend(values.iter().map(|&v| effect(&from, v)));
+                }
+                for c in &arm.cands {
+                    arm.settings.push(ctx.sims(&screened(ctx, c), cal, cfg.screen_repeats())?);
                 }
                 arm.fold_settings = vec![(0..arm.settings.len()).collect(); cfg.inner_folds];
                 arm.full = (0..arm.settings.len()).collect();

@@ -245,13 +245,11 @@ impl Effects {
         self.vegetation_drag_kg_s.map_or(0.0, |c| c / mass_kg)
     }
 
-    /// The rate k of `scar_drag_coefficient` for a rock of `mass_kg` and `volume_m3`, 1/m (0 when off): in
-    /// contact the speed falls as dv/dt = −k v².
-    pub fn scar_drag_per_m(&self, mass_kg: f64, volume_m3: f64) -> f64 {
-        self.scar_drag_coefficient.map_or(0.0, |c| {
-            let radius_m = (3.0 * volume_m3 / (4.0 * std::f64::consts::PI)).cbrt();
-            0.5 * c * SCAR_SOIL_DENSITY_KG_M3 * std::f64::consts::PI * radius_m * radius_m / mass_kg
-        })
+    /// The rate k of `scar_drag_coefficient` for a rock of `mass_kg` and equivalent radius `radius_m`, 1/m (0 when
+    /// off): in contact the speed falls as dv/dt = −k v².
+    pub fn scar_drag_per_m(&self, mass_kg: f64, radius_m: f64) -> f64 {
+        self.scar_drag_coefficient
+            .map_or(0.0, |c| 0.5 * c * SCAR_SOIL_DENSITY_KG_M3 * std::f64::consts::PI * radius_m * radius_m / mass_kg)
     }
 
     /// The restitution coefficient after the restitution effects, for a contact approaching at `approach_mps`

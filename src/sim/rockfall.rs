@@ -303,7 +303,7 @@ impl<'a> Run<'a> {
                 })
                 .collect(),
             vegetation_drag_per_s: params.effects.vegetation_drag_per_s(rock.mass_kg),
-            scar_drag_per_m: params.effects.scar_drag_per_m(rock.mass_kg, rock.volume_m3),
+            scar_drag_per_m: params.effects.scar_drag_per_m(rock.mass_kg, rock.equivalent_radius_m()),
             slippage_m: 0.0,
             contacts: Vec::with_capacity(16),
             previous: Vec::with_capacity(16),
