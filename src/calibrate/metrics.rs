@@ -278,10 +278,7 @@ pub(crate) mod tests {
             rest_m: [obs, 0.0, 0.0],
             runout_m: obs,
             group,
-            rebound_height_m: None,
-            track_times_s: Vec::new(),
-            track_scatter_m: None,
-            impacts: Vec::new(),
+            ..Default::default()
         }
     }
 

@@ -13,8 +13,8 @@ use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
-/// One observed run.
-#[derive(Debug, Clone, PartialEq)]
+/// One observed run (`Default`: empty, with no track, for builders to fill in).
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct FieldRun {
     /// `trajectory_id`.
     pub id: String,
@@ -103,11 +103,7 @@ pub fn field_runs(campaign: &Campaign, group_link_m: f64) -> Result<(Vec<FieldRu
             spin_radps: r.spin_radps,
             rest_m: dep.position_m,
             runout_m: dep.runout_m,
-            group: 0,
-            rebound_height_m: None,
-            track_times_s: Vec::new(),
-            track_scatter_m: None,
-            impacts: Vec::new(),
+            ..Default::default()
         });
     }
     if runs.len() < 6 {

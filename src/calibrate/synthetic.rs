@@ -313,14 +313,7 @@ pub fn synthetic_3d(spec: &Synthetic3d, sim: SimParams) -> Result<Model3d> {
                     size_m: body.extents_m,
                     release_m: [x, y, z],
                     velocity_mps: [speed, 0.0, 0.0],
-                    spin_radps: [0.0; 3],
-                    rest_m: [0.0; 3],
-                    runout_m: 0.0,
-                    group: 0,
-                    rebound_height_m: None,
-                    track_times_s: Vec::new(),
-                    track_scatter_m: None,
-                    impacts: Vec::new(),
+                    ..Default::default()
                 });
             }
         }
@@ -579,14 +572,7 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
                     size_m: [size; 3],
                     release_m: [x, 0.0, z],
                     velocity_mps: [0.5 + uniform(&mut rng), 0.0, 0.0],
-                    spin_radps: [0.0; 3],
-                    rest_m: [0.0; 3],
-                    runout_m: 0.0,
-                    group: 0,
-                    rebound_height_m: None,
-                    track_times_s: Vec::new(),
-                    track_scatter_m: None,
-                    impacts: Vec::new(),
+                    ..Default::default()
                 });
             }
         }

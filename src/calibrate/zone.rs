@@ -338,10 +338,7 @@ mod tests {
                 rest_m: [r, 10.0 * (i % 2) as f64, 0.0],
                 runout_m: r,
                 group: i % 2,
-                rebound_height_m: None,
-                track_times_s: Vec::new(),
-                track_scatter_m: None,
-                impacts: Vec::new(),
+                ..Default::default()
             })
             .collect();
         let sims = simulated
