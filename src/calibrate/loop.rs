@@ -212,7 +212,6 @@ pub fn effects_loop(
             &diags,
             &spread,
             zc.as_ref().map(|z| (z.p_value, z.statistic, !z.regions.is_empty())),
-            round,
         );
         if proposals.is_empty() {
             (ctx.log)("effects loop: no effect's signature shows in the residuals");
@@ -648,7 +647,6 @@ fn propose(
     diags: &[Diagnostic],
     spread: &Diagnostic,
     zone: Option<(f64, f64, bool)>,
-    round: usize,
 ) -> Vec<Proposal> {
     let cfg = ctx.cfg;
     let alpha = cfg.effects.propose_alpha;
@@ -712,7 +710,6 @@ fn propose(
             }
         }
     }
-    let _ = round;
     strongest(props, cfg.effects.max_proposals)
 }
 
