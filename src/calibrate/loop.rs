@@ -238,6 +238,8 @@ pub fn effects_loop(
         let (e0_grid, base_chosen) = cross_validate(ctx, cal, &fold_of, &base_arm.settings, &base_arm.fold_settings);
         let mut e0_refit: Option<Vec<CvError>> = None;
         let mut passed: Vec<Passed> = Vec::new();
+        // With `restart_arms`, the current model with its materials back at the settings' start, shared by the arms.
+        let restart_from = cfg.effects.restart_arms.then(|| with_start_materials(ctx, &current));
         for prop in proposals {
             (ctx.log)(&format!("effects loop, round {round}: trying {}", prop.label));
             let arm = if prop.def.kind == EffectKind::Zone {
@@ -265,9 +267,8 @@ pub fn effects_loop(
                         arm.cands.push(c);
                     }
                 }
-                if cfg.effects.restart_arms {
-                    let from = with_start_materials(ctx, &current);
-                    arm.cands.extend(values.iter().map(|&v| effect(&from, v)));
+                if let Some(from) = &restart_from {
+                    arm.cands.extend(values.iter().map(|&v| effect(from, v)));
                 }
                 for c in &arm.cands {
                     arm.settings.push(ctx.sims(&screened(ctx, c), cal, cfg.screen_repeats())?);
