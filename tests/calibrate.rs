@@ -285,6 +285,12 @@ fn kfold_holds_every_run_out_once_and_pools_the_folds() {
     assert!(json["folds"][0]["holdout_stalling"].is_array());
     let md = std::fs::read_to_string(out.path().join("cv_report.md")).unwrap();
     assert!(md.contains("held-out runs stalling") && md.contains("| 3 |"), "{md}");
+    // Each fold's fitted parameters, and their spread across the folds.
+    let rn = cv.parameters.iter().find(|p| p.name == "ground.rn_mean").expect("rn_mean across the folds");
+    let per_fold: Vec<f64> = cv.folds.iter().map(|f| f.parameters.get("ground.rn_mean").unwrap()).collect();
+    assert_eq!(rn.values, per_fold.iter().map(|&v| Some(v)).collect::<Vec<_>>());
+    assert!(rn.min <= rn.mean && rn.mean <= rn.max && rn.sd > 0.0, "{rn:?}");
+    assert!(md.contains("## Fitted parameters across the folds") && md.contains("| ground.rn_mean |"), "{md}");
     for f in 1..=3 {
         assert!(out.path().join(format!("fold_{f}/report.json")).exists());
     }
@@ -298,6 +304,7 @@ fn kfold_holds_every_run_out_once_and_pools_the_folds() {
     let spread = (mae.values[0] - mae.values[1]).abs() / std::f64::consts::SQRT_2;
     assert!((mae.mean - (mae.values[0] + mae.values[1]) / 2.0).abs() < 1e-12 && (mae.sd - spread).abs() < 1e-9);
     assert!(rep.summary.iter().any(|m| m.runs.starts_with("block ")), "per block as well");
+    assert!(rep.parameters.iter().all(|p| p.values.len() == 6), "every fold of both repeats");
     assert!(!rep.summary.iter().any(|m| m.runs.ends_with(", started")), "no started-only rows when all start");
     assert!(out.path().join("repeat_2/fold_3/report.json").exists() && out.path().join("cv_repeats.md").exists());
 }

@@ -3,6 +3,7 @@
 
 use super::metrics::{metrics_set, Metrics, MetricsSet};
 use super::model::RunSims;
+use super::params::Params;
 use super::report::{metrics_header, metrics_rows};
 use super::runs::{assign_groups, FieldRun};
 use super::{calibrate, runs, split, stats, CalibrationConfig, Model};
@@ -24,6 +25,9 @@ pub struct FoldSummary {
     pub baseline_holdout: Metrics,
     /// Final held-out metrics.
     pub final_holdout: Metrics,
+    /// The final model's parameters, fitted without this fold's runs.
+    #[serde(default)]
+    pub parameters: Params,
     /// Held-out runs whose baseline simulations stall at the release ([`runs::runs_stalling`]).
     #[serde(default)]
     pub holdout_stalling: Vec<runs::StallingRun>,
@@ -53,8 +57,52 @@ pub struct CrossValidation {
     /// [`Self::final_set`], never instead of it: what the parameters score where the model can start the rock (ours).
     #[serde(default)]
     pub final_started: Option<MetricsSet>,
+    /// Each final parameter across the folds ([`parameter_spread`]).
+    #[serde(default)]
+    pub parameters: Vec<ParameterSpread>,
     /// Wall time, s.
     pub total_s: f64,
+}
+
+/// One fitted parameter of the final models across the folds of a k-fold cross-validation (over repeats, every
+/// fold of every repeat): how much the calibrated value moves when other runs are held out, and, over repeats,
+/// with other random numbers. It is the spread of fits to overlapping subsets (a jackknife-like reading, ours),
+/// not a confidence interval: a parameter the runs do not pin wanders, one they pin stays put.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParameterSpread {
+    /// Parameter name, e.g. `default.cr_mean`.
+    pub name: String,
+    /// Per fold, in order; `None` where that fold's final model lacks it (an effect the fold did not keep).
+    pub values: Vec<Option<f64>>,
+    /// Mean over the folds that have it.
+    pub mean: f64,
+    /// Sample standard deviation over the folds that have it (0 for one).
+    pub sd: f64,
+    /// Smallest value.
+    pub min: f64,
+    /// Largest value.
+    pub max: f64,
+}
+
+/// The spread of every parameter any of `fits` has, in name order.
+pub fn parameter_spread<'a>(fits: impl IntoIterator<Item = &'a Params>) -> Vec<ParameterSpread> {
+    let fits: Vec<&Params> = fits.into_iter().collect();
+    let names: std::collections::BTreeSet<&String> = fits.iter().flat_map(|p| p.0.keys()).collect();
+    names
+        .into_iter()
+        .map(|name| {
+            let values: Vec<Option<f64>> = fits.iter().map(|p| p.get(name)).collect();
+            let present: Vec<f64> = values.iter().flatten().copied().collect();
+            ParameterSpread {
+                name: name.clone(),
+                mean: stats::mean(&present),
+                sd: stats::sample_sd(&present),
+                min: present.iter().copied().fold(f64::INFINITY, f64::min),
+                max: present.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                values,
+            }
+        })
+        .collect()
 }
 
 /// The outer fold of every run: each release group's runs spread evenly over the `k` folds, or each release
@@ -109,6 +157,7 @@ pub fn cross_validate(
             effects_added: c.report.effects_added.iter().map(|e| e.label.clone()).collect(),
             baseline_holdout: c.report.baseline.holdout,
             final_holdout: c.report.final_stage.holdout,
+            parameters: c.report.final_stage.parameters.clone(),
             holdout_stalling: c.report.runs_stalling.iter().filter(|r| r.set == "holdout").cloned().collect(),
             time_s: t.elapsed().as_secs_f64(),
         });
@@ -116,6 +165,7 @@ pub fn cross_validate(
         final_pool.extend(c.final_holdout);
     }
     let (not_started, final_started) = started_only(runs, &final_pool);
+    let parameters = parameter_spread(folds.iter().map(|f| &f.parameters));
     let cv = CrossValidation {
         model: model.kind().as_str().into(),
         k,
@@ -124,6 +174,7 @@ pub fn cross_validate(
         final_set: metrics_set(runs, &final_pool),
         not_started,
         final_started,
+        parameters,
         total_s: t0.elapsed().as_secs_f64(),
     };
     write_study(out, "cv_report", &cv, &cv_markdown(&cv))?;
@@ -170,6 +221,9 @@ pub struct RepeatedCrossValidation {
     pub seeds: Vec<u64>,
     /// Mean ± sd of the held-out metrics over the repeats.
     pub summary: Vec<MetricSpread>,
+    /// Each final parameter across every fold of every repeat ([`parameter_spread`]).
+    #[serde(default)]
+    pub parameters: Vec<ParameterSpread>,
     /// Each repeat.
     pub repeats: Vec<CrossValidation>,
     /// Wall time, s.
@@ -219,11 +273,13 @@ pub fn repeated_cross_validation(
             summary.push(MetricSpread { runs: runs.clone(), metric: metric.to_string(), values, mean, sd });
         }
     }
+    let parameters = parameter_spread(repeats.iter().flat_map(|cv| cv.folds.iter().map(|f| &f.parameters)));
     let rcv = RepeatedCrossValidation {
         model: model.kind().as_str().into(),
         k,
         seeds,
         summary,
+        parameters,
         repeats,
         total_s: t0.elapsed().as_secs_f64(),
     };
@@ -283,7 +339,31 @@ fn repeats_markdown(r: &RepeatedCrossValidation) -> String {
         let values: Vec<String> = m.values.iter().map(|v| format!("{v:.2}")).collect();
         let _ = writeln!(s, "| {} | {} | {} | {:.2} ± {:.2} |", m.runs, m.metric, values.join(" | "), m.mean, m.sd);
     }
+    let n = r.repeats.iter().map(|cv| cv.folds.len()).sum::<usize>();
+    parameters_markdown(&mut s, &r.parameters, &format!("all {n} folds of the {} repeats", r.seeds.len()), false);
     s
+}
+
+/// The section on the fitted parameters across folds: each fold's value when `per_fold`, then mean ± sd and range.
+fn parameters_markdown(s: &mut String, spread: &[ParameterSpread], folds: &str, per_fold: bool) {
+    use std::fmt::Write as _;
+    let Some(first) = spread.first() else { return };
+    let _ = writeln!(
+        s,
+        "\n## Fitted parameters across the folds\n\nThe final model of {folds}, each fitted without its held-out \
+         runs: how much a calibrated value moves with the runs it is fitted to (and the random numbers). A spread \
+         of fits to overlapping subsets, not a confidence interval; a fixed parameter has sd 0, and a blank marks a \
+         fold whose final model lacks the parameter (an effect it did not keep).\n"
+    );
+    let k = if per_fold { first.values.len() } else { 0 };
+    let heads: String = (1..=k).map(|f| format!(" fold {f} |")).collect();
+    let _ = writeln!(s, "| parameter |{heads} folds | mean ± sd | min – max |");
+    let _ = writeln!(s, "|---|{}---|---|---|", "---|".repeat(k));
+    for p in spread {
+        let cells: String = p.values.iter().take(k).map(|v| v.map_or(" |".into(), |v| format!(" {v:.4} |"))).collect();
+        let n = p.values.iter().flatten().count();
+        let _ = writeln!(s, "| {} |{cells} {n} | {:.4} ± {:.4} | {:.4} – {:.4} |", p.name, p.mean, p.sd, p.min, p.max);
+    }
 }
 
 /// `v083 (0.55), v093 (0.60)`.
@@ -332,6 +412,7 @@ fn cv_markdown(cv: &CrossValidation) -> String {
             f.time_s
         );
     }
+    parameters_markdown(&mut s, &cv.parameters, &format!("each of the {} folds", cv.k), true);
     s
 }
 
@@ -353,5 +434,34 @@ mod tests {
         assert!((metrics_set(&runs, &pool).overall.runout_mae_m - (2.0 + 59.7) / 3.0).abs() < 1e-12);
         assert_eq!(started.by_block["b1"].runs, 1);
         assert_eq!(started_only(&runs, &[pool[0].clone(), pool[2].clone()]), (vec![], None));
+    }
+
+    #[test]
+    fn a_parameter_spread_covers_the_folds_that_have_it_and_leaves_the_others_blank() {
+        let fit = |cr: f64, k: Option<f64>| {
+            let mut p = Params::default();
+            p.set("default.cr_mean", cr);
+            if let Some(k) = k {
+                p.set("speed_restitution.k_mps", k);
+            }
+            p
+        };
+        let fits = [fit(0.2, None), fit(0.4, Some(6.0)), fit(0.3, Some(8.0))];
+        let spread = parameter_spread(&fits);
+        assert_eq!(spread.len(), 2);
+        let cr = &spread[0];
+        assert_eq!((cr.name.as_str(), cr.values.clone()), ("default.cr_mean", vec![Some(0.2), Some(0.4), Some(0.3)]));
+        assert!((cr.mean - 0.3).abs() < 1e-12 && (cr.sd - 0.1).abs() < 1e-12 && (cr.min, cr.max) == (0.2, 0.4));
+        let k = &spread[1];
+        assert_eq!(k.values, vec![None, Some(6.0), Some(8.0)]);
+        assert_eq!((k.mean, k.min, k.max), (7.0, 6.0, 8.0));
+        assert!((k.sd - 2f64.sqrt()).abs() < 1e-12);
+        let mut md = String::new();
+        parameters_markdown(&mut md, &spread, "each of the 3 folds", true);
+        assert!(md.contains("| parameter | fold 1 | fold 2 | fold 3 | folds | mean ± sd | min – max |"), "{md}");
+        assert!(
+            md.contains("| speed_restitution.k_mps | | 6.0000 | 8.0000 | 2 | 7.0000 ± 1.4142 | 6.0000 – 8.0000 |"),
+            "{md}"
+        );
     }
 }
