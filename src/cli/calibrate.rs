@@ -111,6 +111,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
             for m in r.summary.iter().filter(|m| m.runs == "all") {
                 println!("  {} {:.2} ± {:.2}", m.metric, m.mean, m.sd);
             }
+            print_parameter_spread(&r.parameters);
             println!("wrote {}", a.out.join("cv_repeats.md").display());
             return Ok(());
         }
@@ -118,6 +119,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         let (b, f) = (&cv.baseline.overall, &cv.final_set.overall);
         println!("outer {k}-fold cross-validation over {} runs in {:.0} s", b.runs, cv.total_s);
         print_errors("held-out", b, f);
+        print_parameter_spread(&cv.parameters);
         println!("wrote {}", a.out.join("cv_report.md").display());
         return Ok(());
     }
@@ -192,6 +194,15 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     };
     println!("the final model: talus {command} {} --out MAP", a.out.join(file).display());
     Ok(())
+}
+
+/// The fitted parameters that move across the folds, as mean ± sd (fixed ones are left out).
+fn print_parameter_spread(spread: &[calibrate::crossval::ParameterSpread]) {
+    let moving: Vec<String> =
+        spread.iter().filter(|p| p.sd > 0.0).map(|p| format!("{} {:.3} ± {:.3}", p.name, p.mean, p.sd)).collect();
+    if !moving.is_empty() {
+        println!("fitted across the folds, mean ± sd: {}", moving.join(", "));
+    }
 }
 
 /// One line of `set`'s run-out errors, baseline `b` against final `f`.
