@@ -706,7 +706,12 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             }
         }
     }
-    let _ = writeln!(s, "\n## Parameters\n");
+    let _ = writeln!(
+        s,
+        "\n## Parameters\n\nOne fit on one set of random numbers; how far these values move with the runs fitted \
+         and the random numbers: `talus calibrate --kfold 5 --kfold-repeats 3` (each fold's values, and their spread, \
+         in `cv_repeats.md`).\n"
+    );
     let _ = writeln!(s, "| parameter | baseline | final |");
     let _ = writeln!(s, "|---|---|---|");
     let mut names: Vec<&String> = r.baseline.parameters.0.keys().chain(r.final_stage.parameters.0.keys()).collect();
