@@ -351,9 +351,15 @@ fn parameters_markdown(s: &mut String, spread: &[ParameterSpread], folds: &str, 
     let _ = writeln!(
         s,
         "\n## Fitted parameters across the folds\n\nThe final model of {folds}, each fitted without its held-out \
-         runs: how much a calibrated value moves with the runs it is fitted to (and the random numbers). A spread \
+         runs: how much a calibrated value moves with the runs it is fitted to. A spread \
          of fits to overlapping subsets, not a confidence interval; a fixed parameter has sd 0, and a blank marks a \
-         fold whose final model lacks the parameter (an effect it did not keep).\n"
+         fold whose final model lacks the parameter (an effect it did not keep).{}\n",
+        if per_fold {
+            " The folds share one seed's random numbers, so this spread leaves out what the numbers move; \
+             `--kfold-repeats` adds it."
+        } else {
+            " The repeats each have their own random numbers, so this spread also shows what the numbers move."
+        }
     );
     let k = if per_fold { first.values.len() } else { 0 };
     let heads: String = (1..=k).map(|f| format!(" fold {f} |")).collect();
