@@ -14,6 +14,7 @@ pub mod calibrate;
 pub mod campaign;
 pub mod collector;
 pub mod ensemble;
+pub mod envelope;
 pub mod error;
 pub mod hazard;
 pub mod io;

@@ -306,7 +306,7 @@ fn bad_input_is_answered_with_where_what_and_how() {
 
 #[test]
 fn every_subcommand_has_help_with_an_example() {
-    for args in [vec!["run", "--help"], vec!["mesh", "bench", "--help"]] {
+    for args in [vec!["run", "--help"], vec!["mesh", "bench", "--help"], vec!["envelope", "--help"]] {
         let o = talus().args(&args).output().unwrap();
         assert!(o.status.success());
         let text = String::from_utf8_lossy(&o.stdout);
@@ -327,4 +327,121 @@ fn mesh_bench_writes_an_obj_with_face_and_floor_groups() {
     assert_eq!(mesh.group_names, vec!["face".to_string(), "floor".to_string()]);
     let zmax = mesh.vertices.iter().map(|v| v[2]).fold(0.0, f64::max);
     assert!((zmax - 60.0).abs() < 1e-9, "2 benches + the last face of 20 m: {zmax}");
+}
+
+/// Runs `talus envelope` on `scenarios` into `out` with `args`.
+fn envelope(scenarios: &[&Path], out: &Path, args: &[&str]) -> std::process::Output {
+    let mut cmd = talus();
+    cmd.arg("envelope").args(scenarios).args(["--out", out.to_str().unwrap()]).args(args);
+    cmd.output().unwrap()
+}
+
+fn read_grid(path: &Path) -> talus::raster::Grid {
+    talus::io::geotiff::read_grid(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+#[test]
+fn an_envelope_combines_models_run_with_one_seed_and_measures_the_seeds_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    std::fs::create_dir_all(&a).unwrap();
+    std::fs::create_dir_all(&b).unwrap();
+    let sa = scenario(&a, "", 0.3, "[50.0, 500.0]");
+    let sb = scenario(&b, "", 0.5, "[50.0, 500.0]");
+    // b's own seed differs: the envelope runs both with a's.
+    std::fs::write(&sb, std::fs::read_to_string(&sb).unwrap().replace("seed = 3", "seed = 11")).unwrap();
+    let out = dir.path().join("env");
+    let o = envelope(&[&sa, &sb], &out, &["--floor", "--rocks", "120"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("2 models, 120 rocks each with seed 3") && stdout.contains("seeds alone"), "{stdout}");
+
+    // Each model's run is `talus run` with the common seed, to the byte.
+    let alone = dir.path().join("b_alone");
+    let o = talus()
+        .args(["run", sb.to_str().unwrap(), "--out", alone.to_str().unwrap(), "--rocks", "120", "--seed", "3"])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    let bytes = |p: PathBuf| std::fs::read(&p).unwrap_or_else(|_| panic!("{} missing", p.display()));
+    assert!(bytes(alone.join("endpoints.csv")) == bytes(out.join("models/b/endpoints.csv")));
+    // The floor runs the first model with seeds 3 and 4: its seed 3 is model a.
+    assert!(bytes(out.join("floor/models/seed_3/endpoints.csv")) == bytes(out.join("models/a/endpoints.csv")));
+    assert!(bytes(out.join("floor/models/seed_4/endpoints.csv")) != bytes(out.join("models/a/endpoints.csv")));
+
+    // Each combined raster is the cell-wise min, median and max of the two models' rasters.
+    for stem in ["reach_probability", "kinetic_energy_p95_kj", "bounce_height_max_m"] {
+        let [ga, gb] = ["a", "b"].map(|m| read_grid(&out.join(format!("models/{m}/{stem}.tif"))));
+        let [lo, mid, hi] = ["min", "median", "max"].map(|s| read_grid(&out.join(format!("{stem}_{s}.tif"))));
+        let mut both = 0;
+        for k in 0..ga.values.len() {
+            let (x, y) = (ga.values[k], gb.values[k]);
+            match (x.is_nan(), y.is_nan()) {
+                (true, true) => assert!(hi.values[k].is_nan() && lo.values[k].is_nan(), "{stem} cell {k}"),
+                (false, false) => {
+                    both += 1;
+                    assert_eq!((lo.values[k], hi.values[k]), (x.min(y), x.max(y)), "{stem} cell {k}");
+                    assert!((mid.values[k] - 0.5 * (x + y)).abs() <= 1e-5 * (1.0 + x.abs() + y.abs()));
+                }
+                _ => {
+                    let v = if x.is_nan() { y } else { x };
+                    assert_eq!((lo.values[k], mid.values[k], hi.values[k]), (v, v, v), "{stem} cell {k}");
+                }
+            }
+        }
+        assert!(both > 10, "{stem}: only {both} cells with both models");
+    }
+    let reaching = read_grid(&out.join("models_reaching.tif"));
+    assert!(reaching.values.iter().all(|v| v.is_nan() || [0.0, 1.0, 2.0].contains(v)));
+    assert!(reaching.values.contains(&2.0));
+
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("envelope.json")).unwrap()).unwrap();
+    let names: Vec<&str> = summary["models"].as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["a", "b"]);
+    assert!(summary["models"].as_array().unwrap().iter().all(|m| m["seed"] == 3 && m["rocks"] == 120));
+    assert_eq!(summary["rasters"].as_array().unwrap().len(), 6);
+    assert_eq!(summary["floor"].as_array().unwrap().len(), 6);
+    let md = std::fs::read_to_string(out.join("envelope.md")).unwrap();
+    assert!(md.contains("floor P50") && md.contains("![runs reaching](models_reaching.png)"));
+    for f in summary["outputs"].as_array().unwrap() {
+        assert!(out.join(f.as_str().unwrap()).exists(), "{f} listed but missing");
+    }
+    for e in std::fs::read_dir(&out).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(!name.ends_with(".tmp"), "{name} left behind");
+    }
+}
+
+#[test]
+fn the_same_model_twice_has_no_spread_and_models_of_two_frames_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a"), dir.path().join("b"));
+    std::fs::create_dir_all(&a).unwrap();
+    std::fs::create_dir_all(&b).unwrap();
+    let sa = scenario(&a, "", 0.3, "[50.0, 500.0]");
+    let sb = scenario(&b, "", 0.3, "[50.0, 500.0]");
+    std::fs::write(&sb, std::fs::read_to_string(&sb).unwrap().replace("seed = 3", "seed = 11")).unwrap();
+    let out = dir.path().join("env");
+    let o = envelope(&[&sa, &sb], &out, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for stem in ["endpoint_density", "kinetic_energy_max_kj", "bounce_height_p95_m"] {
+        let [lo, hi] = ["min", "max"].map(|s| read_grid(&out.join(format!("{stem}_{s}.tif"))));
+        assert!(lo.values.iter().zip(&hi.values).all(|(x, y)| x == y || (x.is_nan() && y.is_nan())), "{stem}");
+    }
+
+    // Another cell size: refused at the second model, naming it and the key to align.
+    std::fs::write(&sb, std::fs::read_to_string(&sb).unwrap().replace("cell_size_m = 4.0", "cell_size_m = 2.0"))
+        .unwrap();
+    let bad = dir.path().join("bad");
+    let o = envelope(&[&sa, &sb], &bad, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("b: rasters") && err.contains("cell_size_m") && err.contains("how to fix"), "{err}");
+    assert!(!bad.join("envelope.json").exists() && !bad.join("reach_probability_max.tif").exists());
+    // One model is not an envelope.
+    let o = envelope(&[&sa], &bad, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("at least two models"), "{err}");
 }

@@ -3,6 +3,7 @@
 mod barrier;
 mod benches;
 mod calibrate;
+mod envelope;
 mod mesh;
 mod profile;
 mod progress;
@@ -60,6 +61,7 @@ enum Command {
     Mesh(mesh::MeshArgs),
     Barrier(barrier::BarrierArgs),
     Calibrate(calibrate::CalibrateArgs),
+    Envelope(envelope::EnvelopeArgs),
 }
 
 /// Parses the command line and runs the command.
@@ -81,5 +83,6 @@ pub fn main() -> anyhow::Result<()> {
         Command::Mesh(a) => mesh::run(a),
         Command::Barrier(a) => barrier::run(a),
         Command::Calibrate(a) => calibrate::run(a),
+        Command::Envelope(a) => envelope::run(a),
     }
 }

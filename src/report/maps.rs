@@ -127,7 +127,7 @@ pub fn fmt_num(v: f64) -> String {
 pub const LOG_DECADES: f32 = 3.0;
 
 /// The log colour bar range of `grid`: its positive maximum down to at most [`LOG_DECADES`] below it.
-fn log_range(grid: &Grid) -> Option<(f32, f32)> {
+pub fn log_range(grid: &Grid) -> Option<(f32, f32)> {
     let (lo, hi) = grid.values.iter().filter(|v| **v > 0.0).fold(None, |acc: Option<(f32, f32)>, &v| match acc {
         None => Some((v, v)),
         Some((a, b)) => Some((a.min(v), b.max(v))),

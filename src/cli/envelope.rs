@@ -1,0 +1,91 @@
+//! `talus envelope`.
+
+use super::progress;
+use anyhow::Context;
+use clap::Args;
+use std::path::PathBuf;
+use talus::envelope::run_envelope;
+use talus::scenario::ScenarioFile;
+
+/// Run several scenarios of one terrain with the same seed and combine their hazard rasters cell by cell: the
+/// lowest, median and highest value over the models (GeoTIFF and PNG), and how many models' rocks reach each
+/// cell. Made for the fold models of `talus calibrate --kfold` (their calibrated.toml files): read beside --floor
+/// (the spread of seeds alone), the maps' spread is the calibration's uncertainty. Writes envelope.md,
+/// envelope.json and each model's run in models/NAME/.
+///
+/// Example:
+///   talus envelope outputs/cv/fold_*/calibrated.toml --floor --out outputs/cv_envelope
+#[derive(Debug, Args)]
+#[command(verbatim_doc_comment)]
+pub struct EnvelopeArgs {
+    /// Scenario files (TOML), two or more, all on the same terrain with the same [output] cell_size_m.
+    #[arg(required = true, num_args = 1..)]
+    scenarios: Vec<PathBuf>,
+    /// Output folder (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Also run the first scenario once per model with the seeds that follow (in OUT/floor/): the spread the
+    /// random draws alone give at this number of rocks, beside which the models' spread is read.
+    #[arg(long)]
+    floor: bool,
+    #[command(flatten)]
+    control: super::RunControl,
+}
+
+pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
+    a.control.check()?;
+    let scenarios = a
+        .scenarios
+        .iter()
+        .map(|p| ScenarioFile::read(p).and_then(|f| f.resolve(p)))
+        .collect::<talus::Result<Vec<_>>>()?;
+    let pb = progress::bar(0, "rocks");
+    let n = scenarios.len();
+    let runs = if a.floor { 2 * n } else { n };
+    let progress = |run: usize, done: usize, total: usize| {
+        if done == 1 {
+            pb.set_length(total as u64);
+            pb.set_message(format!("run {} of {runs}", run + 1));
+            pb.reset();
+        }
+        pb.set_position(done as u64);
+    };
+    let summary = run_envelope(&scenarios, &a.control.overrides(None), &a.out, a.floor, &progress)
+        .with_context(|| format!("combining {n} models into {}", a.out.display()))?;
+    pb.finish_and_clear();
+    println!(
+        "{n} models, {} rocks each with seed {}, in {:.1} s",
+        summary.models[0].rocks, summary.models[0].seed, summary.wall_time_s
+    );
+    for m in &summary.models {
+        println!(
+            "  {}: run-out median {:.1} m (P95 {:.1} m); largest energy P95 {:.1} kJ; largest bounce P50 {:.2} m, P95 {:.2} m",
+            m.name, m.runout_m.p50, m.runout_m.p95, m.max_kinetic_kj.p95, m.max_bounce_m.p50, m.max_bounce_m.p95
+        );
+    }
+    println!(
+        "(max - min) / median over the models, in the median cell and at P95, over the cells at least {} rocks of \
+         every model reach:",
+        talus::envelope::WELL_SAMPLED_ROCKS
+    );
+    for (i, r) in summary.rasters.iter().enumerate() {
+        let pct = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.0} %", 100.0 * v));
+        let floor = summary.floor.as_ref().map_or(String::new(), |f| {
+            format!("; seeds alone {} and {}", pct(f[i].relative_spread_p50), pct(f[i].relative_spread_p95))
+        });
+        println!(
+            "  {}: {} and {} ({} cells){floor}",
+            r.raster,
+            pct(r.relative_spread_p50),
+            pct(r.relative_spread_p95),
+            r.cells
+        );
+    }
+    println!(
+        "wrote {} files to {}; read {}",
+        summary.outputs.len(),
+        a.out.display(),
+        a.out.join("envelope.md").display()
+    );
+    Ok(())
+}
