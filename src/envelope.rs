@@ -3,6 +3,7 @@
 //! over the models, with the number of models whose rocks reach the cell. Ours: it shows a barrier designer how
 //! far a map moves between models that fit the field data about equally well, in one raster per statistic.
 
+use crate::collector::facts::CollectorFacts;
 use crate::error::{Error, Result};
 use crate::raster::Grid;
 use crate::report::maps;
@@ -41,6 +42,44 @@ pub struct EnvelopeModel {
     pub max_bounce_m: Stats,
     /// Wall-clock time of its run, s.
     pub wall_time_s: f64,
+    /// Its collector lines (the scenario's `[[collectors]]`).
+    pub collectors: Vec<CollectorFacts>,
+}
+
+/// A figure's lowest, median and highest value over the runs that have it.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Spread3 {
+    /// Lowest.
+    pub min: Option<f64>,
+    /// Median.
+    pub median: Option<f64>,
+    /// Highest.
+    pub max: Option<f64>,
+}
+
+impl Spread3 {
+    /// Over the values that are there.
+    pub fn of(values: impl IntoIterator<Item = Option<f64>>) -> Spread3 {
+        let mut v: Vec<f64> = values.into_iter().flatten().filter(|x| x.is_finite()).collect();
+        v.sort_by(f64::total_cmp);
+        if v.is_empty() {
+            return Spread3::default();
+        }
+        Spread3 { min: Some(v[0]), median: Some(quantile_sorted(&v, 0.5)), max: Some(v[v.len() - 1]) }
+    }
+}
+
+/// One collector line over the runs: what a barrier there would face under each model.
+#[derive(Debug, Clone, Serialize)]
+pub struct CollectorSpread {
+    /// Collector name (the same in every run).
+    pub name: String,
+    /// Fraction of the rocks that cross it.
+    pub fraction_crossing: Spread3,
+    /// 95th percentile of the kinetic energy at the crossings, kJ.
+    pub kinetic_kj_p95: Spread3,
+    /// 95th percentile of the passing height, m.
+    pub passing_height_m_p95: Spread3,
 }
 
 /// How far one raster moves between the models.
@@ -72,12 +111,42 @@ pub struct EnvelopeSummary {
     pub models: Vec<EnvelopeModel>,
     /// Each raster's spread between the models.
     pub rasters: Vec<RasterSpread>,
-    /// With `--floor`: the same spread between runs of the first model with other seeds.
-    pub floor: Option<Vec<RasterSpread>>,
+    /// The collector lines every run has, over the runs.
+    pub collectors: Vec<CollectorSpread>,
+    /// With `--floor`: the first model's runs with other seeds, summarised alike.
+    pub floor: Option<FloorSpread>,
     /// Wall-clock time, s.
     pub wall_time_s: f64,
     /// Files written (besides the models' own runs in `models/`).
     pub outputs: Vec<String>,
+}
+
+/// The spread between runs of the first model with other seeds (`--floor`).
+#[derive(Debug, Clone, Serialize)]
+pub struct FloorSpread {
+    /// Each raster's spread.
+    pub rasters: Vec<RasterSpread>,
+    /// Each collector line's.
+    pub collectors: Vec<CollectorSpread>,
+}
+
+/// The collector lines of the first model that every model has, each over the models.
+pub fn collector_spread(models: &[EnvelopeModel]) -> Vec<CollectorSpread> {
+    let Some(first) = models.first() else { return Vec::new() };
+    first
+        .collectors
+        .iter()
+        .filter_map(|c| {
+            let per_model: Vec<&CollectorFacts> =
+                models.iter().filter_map(|m| m.collectors.iter().find(|x| x.name == c.name)).collect();
+            (per_model.len() == models.len()).then(|| CollectorSpread {
+                name: c.name.clone(),
+                fraction_crossing: Spread3::of(per_model.iter().map(|x| Some(x.fraction_crossing))),
+                kinetic_kj_p95: Spread3::of(per_model.iter().map(|x| x.kinetic_kj_p95)),
+                passing_height_m_p95: Spread3::of(per_model.iter().map(|x| x.passing_height_m_p95)),
+            })
+        })
+        .collect()
 }
 
 /// Refuses `b` (of model `name_b`) unless it covers the same cells as `a` (of `name_a`).
@@ -186,7 +255,7 @@ pub fn run_envelope(
             ),
         )?;
         summary.outputs.push("floor/".into());
-        summary.floor = Some(f.rasters);
+        summary.floor = Some(FloorSpread { rasters: f.rasters, collectors: f.collectors });
     }
     summary.wall_time_s = t0.elapsed().as_secs_f64();
     write_summary(out_dir, &summary, &format!("{n} models, each with seed {seed}"))?;
@@ -232,6 +301,7 @@ fn envelope_of(
             max_kinetic_kj: s.max_kinetic_kj.clone(),
             max_bounce_m: s.max_bounce_m.clone(),
             wall_time_s: s.wall_time_s,
+            collectors: s.collectors.clone(),
         });
         match &first {
             None => first = Some(run),
@@ -292,6 +362,7 @@ fn envelope_of(
     outputs.extend(["envelope.json".to_string(), "envelope.md".to_string()]);
     Ok(EnvelopeSummary {
         talus_version: env!("CARGO_PKG_VERSION").to_string(),
+        collectors: collector_spread(&models),
         models,
         rasters,
         floor: None,
@@ -426,7 +497,7 @@ fn markdown(s: &EnvelopeSummary, members: &str) -> String {
     let floors: Vec<Option<&RasterSpread>> = match &s.floor {
         Some(f) => {
             md += " floor P50 | floor P95 |\n|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-            s.rasters.iter().map(|r| f.iter().find(|x| x.raster == r.raster)).collect()
+            s.rasters.iter().map(|r| f.rasters.iter().find(|x| x.raster == r.raster)).collect()
         }
         None => {
             md += "\n|---|---:|---:|---:|---:|---:|---:|\n";
@@ -448,6 +519,43 @@ fn markdown(s: &EnvelopeSummary, members: &str) -> String {
             md += &format!(" {} | {} |", opt(f.relative_spread_p50), opt(f.relative_spread_p95));
         }
         md += "\n";
+    }
+    if !s.collectors.is_empty() {
+        md += "\n## Collector lines\n\nEach line's figures over the runs, lowest / median / highest (the \
+               scenarios' `[[collectors]]` of the same name in every run).";
+        if s.floor.is_some() {
+            md += " Beside them, the lowest and highest between seeds of the first model.";
+        }
+        md += "\n\n| collector | fraction crossing | kinetic energy P95 (kJ) | passing height P95 (m) |";
+        md += if s.floor.is_some() {
+            " seeds alone: fraction | energy | height |\n|---|---|---|---|---|---|---|\n"
+        } else {
+            "\n|---|---|---|---|\n"
+        };
+        for c in &s.collectors {
+            let three = |x: &Spread3, digits: usize| {
+                [x.min, x.median, x.max].map(|v| v.map_or("-".to_string(), |v| format!("{v:.digits$}"))).join(" / ")
+            };
+            md += &format!(
+                "| {} | {} | {} | {} |",
+                c.name,
+                three(&c.fraction_crossing, 3),
+                three(&c.kinetic_kj_p95, 1),
+                three(&c.passing_height_m_p95, 2)
+            );
+            if let Some(f) = s.floor.as_ref().and_then(|f| f.collectors.iter().find(|x| x.name == c.name)) {
+                let two = |x: &Spread3, digits: usize| {
+                    [x.min, x.max].map(|v| v.map_or("-".to_string(), |v| format!("{v:.digits$}"))).join(" – ")
+                };
+                md += &format!(
+                    " {} | {} | {} |",
+                    two(&f.fraction_crossing, 3),
+                    two(&f.kinetic_kj_p95, 1),
+                    two(&f.passing_height_m_p95, 2)
+                );
+            }
+            md += "\n";
+        }
     }
     md += &format!("\n## Maps\n\n![runs reaching]({REACHING}.png)\n");
     for (stem, description) in RASTERS {
@@ -489,6 +597,13 @@ mod tests {
         let s = spread("x", &grids, &[min, median, max], &[true; 4]);
         assert_eq!((s.cells, s.relative_spread_p50), (1, Some(1.0)));
         assert_eq!((s.highest_min, s.highest_median, s.highest_max), (Some(2.0), Some(4.0), Some(8.0)));
+    }
+
+    #[test]
+    fn a_figure_spreads_over_the_runs_that_have_it() {
+        let s = Spread3::of([Some(3.0), None, Some(1.0), Some(f64::NAN), Some(2.0)]);
+        assert_eq!((s.min, s.median, s.max), (Some(1.0), Some(2.0), Some(3.0)));
+        assert_eq!(Spread3::of([None, None]), Spread3::default());
     }
 
     #[test]

@@ -346,8 +346,9 @@ fn an_envelope_combines_models_run_with_one_seed_and_measures_the_seeds_alone() 
     let (a, b) = (dir.path().join("a"), dir.path().join("b"));
     std::fs::create_dir_all(&a).unwrap();
     std::fs::create_dir_all(&b).unwrap();
-    let sa = scenario(&a, "", 0.3, "[50.0, 500.0]");
-    let sb = scenario(&b, "", 0.5, "[50.0, 500.0]");
+    let line = "[[collectors]]\nname = \"toe\"\nline = [[500044.0, 5000000.0], [500044.0, 5000040.0]]\n";
+    let sa = scenario(&a, line, 0.3, "[50.0, 500.0]");
+    let sb = scenario(&b, line, 0.5, "[50.0, 500.0]");
     // b's own seed differs: the envelope runs both with a's.
     std::fs::write(&sb, std::fs::read_to_string(&sb).unwrap().replace("seed = 3", "seed = 11")).unwrap();
     let out = dir.path().join("env");
@@ -401,9 +402,25 @@ fn an_envelope_combines_models_run_with_one_seed_and_measures_the_seeds_alone() 
     assert_eq!(names, ["a", "b"]);
     assert!(summary["models"].as_array().unwrap().iter().all(|m| m["seed"] == 3 && m["rocks"] == 120));
     assert_eq!(summary["rasters"].as_array().unwrap().len(), 6);
-    assert_eq!(summary["floor"].as_array().unwrap().len(), 6);
+    assert_eq!(summary["floor"]["rasters"].as_array().unwrap().len(), 6);
+    // The collector line over the two models: the lower and higher of their own summaries' figures.
+    let own = |m: &str| -> serde_json::Value {
+        let run: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join(format!("models/{m}/summary.json"))).unwrap())
+                .unwrap();
+        run["collectors"][0].clone()
+    };
+    let (ca, cb) = (own("a"), own("b"));
+    let toe = &summary["collectors"][0];
+    assert_eq!(toe["name"], "toe");
+    for key in ["fraction_crossing", "passing_height_m_p95", "kinetic_kj_p95"] {
+        let (x, y) = (ca[key].as_f64().unwrap(), cb[key].as_f64().unwrap());
+        assert_eq!((toe[key]["min"].as_f64(), toe[key]["max"].as_f64()), (Some(x.min(y)), Some(x.max(y))), "{key}");
+    }
+    assert!(ca["fraction_crossing"].as_f64().unwrap() > 0.0, "no rock reached the toe line");
+    assert_eq!(summary["floor"]["collectors"][0]["name"], "toe");
     let md = std::fs::read_to_string(out.join("envelope.md")).unwrap();
-    assert!(md.contains("floor P50") && md.contains("![runs reaching](models_reaching.png)"));
+    assert!(md.contains("floor P50") && md.contains("| toe |") && md.contains("![runs reaching](models_reaching.png)"));
     for f in summary["outputs"].as_array().unwrap() {
         assert!(out.join(f.as_str().unwrap()).exists(), "{f} listed but missing");
     }

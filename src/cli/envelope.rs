@@ -71,7 +71,11 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
     for (i, r) in summary.rasters.iter().enumerate() {
         let pct = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.0} %", 100.0 * v));
         let floor = summary.floor.as_ref().map_or(String::new(), |f| {
-            format!("; seeds alone {} and {}", pct(f[i].relative_spread_p50), pct(f[i].relative_spread_p95))
+            format!(
+                "; seeds alone {} and {}",
+                pct(f.rasters[i].relative_spread_p50),
+                pct(f.rasters[i].relative_spread_p95)
+            )
         });
         println!(
             "  {}: {} and {} ({} cells){floor}",
@@ -79,6 +83,23 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
             pct(r.relative_spread_p50),
             pct(r.relative_spread_p95),
             r.cells
+        );
+    }
+    let range = |x: &talus::envelope::Spread3, digits: usize| match (x.min, x.max) {
+        (Some(lo), Some(hi)) => format!("{lo:.digits$}-{hi:.digits$}"),
+        _ => "-".to_string(),
+    };
+    for c in &summary.collectors {
+        let floor = summary.floor.as_ref().and_then(|f| f.collectors.iter().find(|x| x.name == c.name));
+        let seeds = floor.map_or(String::new(), |f| {
+            format!(" (seeds alone {} m, {} kJ)", range(&f.passing_height_m_p95, 2), range(&f.kinetic_kj_p95, 1))
+        });
+        println!(
+            "collector {}: passing height P95 {} m, kinetic energy P95 {} kJ over the models{seeds}; fraction crossing {}",
+            c.name,
+            range(&c.passing_height_m_p95, 2),
+            range(&c.kinetic_kj_p95, 1),
+            range(&c.fraction_crossing, 3)
         );
     }
     println!(
