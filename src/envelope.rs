@@ -241,7 +241,8 @@ pub fn run_envelope(
     let mut summary = envelope_of(&runs, overrides, out_dir, progress)?;
     if floor {
         let runs: Vec<Member> = (0..n as u64)
-            .map(|i| Member { scenario: &scenarios[0], name: format!("seed_{}", seed + i), seed: seed + i })
+            .map(|i| seed.wrapping_add(i))
+            .map(|s| Member { scenario: &scenarios[0], name: format!("seed_{s}"), seed: s })
             .collect();
         let floor_dir = out_dir.join("floor");
         let f = envelope_of(&runs, overrides, &floor_dir, &|i, d, t| progress(n + i, d, t))?;
@@ -251,7 +252,7 @@ pub fn run_envelope(
             &format!(
                 "the first model, {} with seeds {seed} to {}",
                 runs[0].scenario.path.display(),
-                seed + n as u64 - 1
+                seed.wrapping_add(n as u64 - 1)
             ),
         )?;
         summary.outputs.push("floor/".into());

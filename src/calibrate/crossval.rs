@@ -340,12 +340,19 @@ fn repeats_markdown(r: &RepeatedCrossValidation) -> String {
         let _ = writeln!(s, "| {} | {} | {} | {:.2} ± {:.2} |", m.runs, m.metric, values.join(" | "), m.mean, m.sd);
     }
     let n = r.repeats.iter().map(|cv| cv.folds.len()).sum::<usize>();
-    parameters_markdown(&mut s, &r.parameters, &format!("all {n} folds of the {} repeats", r.seeds.len()), false);
+    parameters_markdown(
+        &mut s,
+        &r.model,
+        &r.parameters,
+        &format!("all {n} folds of the {} repeats", r.seeds.len()),
+        false,
+    );
     s
 }
 
-/// The section on the fitted parameters across folds: each fold's value when `per_fold`, then mean ± sd and range.
-fn parameters_markdown(s: &mut String, spread: &[ParameterSpread], folds: &str, per_fold: bool) {
+/// The section on the fitted parameters across folds: each fold's value when `per_fold`, then mean ± sd and range;
+/// for a `model` of `3drb`, how to map the fold models.
+fn parameters_markdown(s: &mut String, model: &str, spread: &[ParameterSpread], folds: &str, per_fold: bool) {
     use std::fmt::Write as _;
     let Some(first) = spread.first() else { return };
     let _ = writeln!(
@@ -369,6 +376,25 @@ fn parameters_markdown(s: &mut String, spread: &[ParameterSpread], folds: &str, 
         let cells: String = p.values.iter().take(k).map(|v| v.map_or(" |".into(), |v| format!(" {v:.4} |"))).collect();
         let n = p.values.iter().flatten().count();
         let _ = writeln!(s, "| {} |{cells} {n} | {:.4} ± {:.4} | {:.4} – {:.4} |", p.name, p.mean, p.sd, p.min, p.max);
+    }
+    if model == "3drb" {
+        let _ = writeln!(
+            s,
+            "\nWhat the spread does to the maps: `talus envelope {} --floor --out MAP` (from this folder) runs \
+             these models with one seed and gives each hazard raster's lowest, median and highest value over them, \
+             beside the spread that seeds alone give.",
+            fold_models_glob(per_fold)
+        );
+    }
+}
+
+/// The `calibrated.toml` files of a cross-validation's fold models, relative to its output folder (one
+/// cross-validation's when `per_fold`, else every repeat's).
+pub fn fold_models_glob(per_fold: bool) -> &'static str {
+    if per_fold {
+        "fold_*/calibrated.toml"
+    } else {
+        "repeat_*/fold_*/calibrated.toml"
     }
 }
 
@@ -418,7 +444,7 @@ fn cv_markdown(cv: &CrossValidation) -> String {
             f.time_s
         );
     }
-    parameters_markdown(&mut s, &cv.parameters, &format!("each of the {} folds", cv.k), true);
+    parameters_markdown(&mut s, &cv.model, &cv.parameters, &format!("each of the {} folds", cv.k), true);
     s
 }
 
@@ -463,11 +489,15 @@ mod tests {
         assert_eq!((k.mean, k.min, k.max), (7.0, 6.0, 8.0));
         assert!((k.sd - 2f64.sqrt()).abs() < 1e-12);
         let mut md = String::new();
-        parameters_markdown(&mut md, &spread, "each of the 3 folds", true);
+        parameters_markdown(&mut md, "3drb", &spread, "each of the 3 folds", true);
         assert!(md.contains("| parameter | fold 1 | fold 2 | fold 3 | folds | mean ± sd | min – max |"), "{md}");
         assert!(
             md.contains("| speed_restitution.k_mps | | 6.0000 | 8.0000 | 2 | 7.0000 ± 1.4142 | 6.0000 – 8.0000 |"),
             "{md}"
         );
+        assert!(md.contains("`talus envelope fold_*/calibrated.toml --floor --out MAP`"), "{md}");
+        let mut md = String::new();
+        parameters_markdown(&mut md, "2dlm", &spread, "each of the 3 folds", true);
+        assert!(!md.contains("talus envelope"), "profile models are not `talus run` scenarios: {md}");
     }
 }

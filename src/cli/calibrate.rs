@@ -112,6 +112,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
                 println!("  {} {:.2} ± {:.2}", m.metric, m.mean, m.sd);
             }
             print_parameter_spread(&r.parameters);
+            print_fold_maps(&r.model, &a.out, false);
             println!("wrote {}", a.out.join("cv_repeats.md").display());
             return Ok(());
         }
@@ -120,6 +121,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         println!("outer {k}-fold cross-validation over {} runs in {:.0} s", b.runs, cv.total_s);
         print_errors("held-out", b, f);
         print_parameter_spread(&cv.parameters);
+        print_fold_maps(&cv.model, &a.out, true);
         println!("wrote {}", a.out.join("cv_report.md").display());
         return Ok(());
     }
@@ -202,6 +204,15 @@ fn print_parameter_spread(spread: &[calibrate::crossval::ParameterSpread]) {
         spread.iter().filter(|p| p.sd > 0.0).map(|p| format!("{} {:.3} ± {:.3}", p.name, p.mean, p.sd)).collect();
     if !moving.is_empty() {
         println!("fitted across the folds, mean ± sd: {}", moving.join(", "));
+    }
+}
+
+/// How to map a 3DRB cross-validation's fold models (in `out`; one cross-validation's when `per_fold`, else every
+/// repeat's).
+fn print_fold_maps(model: &str, out: &std::path::Path, per_fold: bool) {
+    if model == "3drb" {
+        let models = out.join(calibrate::crossval::fold_models_glob(per_fold));
+        println!("the fold models as maps: talus envelope {} --floor --out MAP", models.display());
     }
 }
 
