@@ -13,12 +13,9 @@ use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
 
-/// The statistics over models written for each raster: (file-name suffix, description).
-pub const STATISTICS: [(&str, &str); 3] = [
-    ("min", "lowest value over the models with a value in the cell"),
-    ("median", "median over the models with a value in the cell"),
-    ("max", "highest value over the models"),
-];
+/// The statistics over models written for each raster (file-name suffixes): the lowest, median and highest value
+/// over the models with a value in the cell (see [`combine`]).
+pub const STATISTICS: [&str; 3] = ["min", "median", "max"];
 
 /// File stem of the raster counting the models whose rocks reach each cell.
 pub const REACHING: &str = "models_reaching";
@@ -342,7 +339,7 @@ fn envelope_of(
         let style = maps::raster_style(stem);
         // One colour bar for the three maps of a raster, so they compare by eye.
         let range = maps::log_range(&combined[2]);
-        for ((stat, _), grid) in STATISTICS.iter().zip(&combined) {
+        for (stat, grid) in STATISTICS.iter().zip(&combined) {
             let title = format!("{}: {stat} of {n} models", style.title);
             write(format!("{stem}_{stat}"), grid, &maps::Style { title, range, ..style.clone() })?;
         }
@@ -561,7 +558,7 @@ fn markdown(s: &EnvelopeSummary, members: &str) -> String {
     md += &format!("\n## Maps\n\n![runs reaching]({REACHING}.png)\n");
     for (stem, description) in RASTERS {
         md += &format!("\n### {stem} ({description})\n\n");
-        for (stat, _) in STATISTICS {
+        for stat in STATISTICS {
             md += &format!("![{stem} {stat}]({stem}_{stat}.png)\n");
         }
     }

@@ -377,24 +377,24 @@ fn parameters_markdown(s: &mut String, model: &str, spread: &[ParameterSpread], 
         let n = p.values.iter().flatten().count();
         let _ = writeln!(s, "| {} |{cells} {n} | {:.4} ± {:.4} | {:.4} – {:.4} |", p.name, p.mean, p.sd, p.min, p.max);
     }
-    if model == "3drb" {
+    if let Some(models) = fold_models_glob(model, per_fold) {
         let _ = writeln!(
             s,
-            "\nWhat the spread does to the maps: `talus envelope {} --floor --out MAP` (from this folder) runs \
+            "\nWhat the spread does to the maps: `talus envelope {models} --floor --out MAP` (from this folder) runs \
              these models with one seed and gives each hazard raster's lowest, median and highest value over them, \
-             beside the spread that seeds alone give.",
-            fold_models_glob(per_fold)
+             beside the spread that seeds alone give."
         );
     }
 }
 
 /// The `calibrated.toml` files of a cross-validation's fold models, relative to its output folder (one
-/// cross-validation's when `per_fold`, else every repeat's).
-pub fn fold_models_glob(per_fold: bool) -> &'static str {
-    if per_fold {
-        "fold_*/calibrated.toml"
-    } else {
-        "repeat_*/fold_*/calibrated.toml"
+/// cross-validation's when `per_fold`, else every repeat's), for `talus envelope`: `None` for a `model` other than
+/// `3drb`, whose fold models are profile scenarios.
+pub fn fold_models_glob(model: &str, per_fold: bool) -> Option<&'static str> {
+    match (model, per_fold) {
+        ("3drb", true) => Some("fold_*/calibrated.toml"),
+        ("3drb", false) => Some("repeat_*/fold_*/calibrated.toml"),
+        _ => None,
     }
 }
 

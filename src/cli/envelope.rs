@@ -53,10 +53,13 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
     let summary = run_envelope(&scenarios, &a.control.overrides(None), &a.out, a.floor, &progress)
         .with_context(|| format!("combining {n} models into {}", a.out.display()))?;
     pb.finish_and_clear();
-    println!(
-        "{n} models, {} rocks each with seed {}, in {:.1} s",
-        summary.models[0].rocks, summary.models[0].seed, summary.wall_time_s
-    );
+    let rocks = summary.models[0].rocks;
+    let rocks = if summary.models.iter().all(|m| m.rocks == rocks) {
+        format!("{rocks} rocks each")
+    } else {
+        "rocks as each scenario says".to_string()
+    };
+    println!("{n} models, {rocks} with seed {}, in {:.1} s", summary.models[0].seed, summary.wall_time_s);
     for m in &summary.models {
         println!(
             "  {}: run-out median {:.1} m (P95 {:.1} m); largest energy P95 {:.1} kJ; largest bounce P50 {:.2} m, P95 {:.2} m",
