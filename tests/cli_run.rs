@@ -462,3 +462,62 @@ fn the_same_model_twice_has_no_spread_and_models_of_two_frames_are_refused() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("at least two models"), "{err}");
 }
+
+#[test]
+fn an_envelope_of_profile_models_combines_their_envelopes_station_by_station() {
+    let dir = tempfile::tempdir().unwrap();
+    let text =
+        std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/profile_bench.toml")).unwrap();
+    let mut paths = Vec::new();
+    for (name, roughness) in [("a", "2.0"), ("b", "6.0")] {
+        std::fs::create_dir_all(dir.path().join(name)).unwrap();
+        let p = dir.path().join(name).join("profile.toml");
+        std::fs::write(&p, text.replacen("roughness_sd_deg = 2.0", &format!("roughness_sd_deg = {roughness}"), 1))
+            .unwrap();
+        paths.push(p);
+    }
+    let out = dir.path().join("env");
+    let o = envelope(&[&paths[0], &paths[1]], &out, &["--floor", "--rocks", "200"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("2 profile models with seed 42") && stdout.contains("first bench catches"), "{stdout}");
+
+    // envelopes.csv: the station keys, then each column's min / median / max over the two models.
+    let read = |p: PathBuf| talus::envelope::profile::Table::read(&p).unwrap();
+    let (ea, eb, env) = (
+        read(out.join("models/a/envelopes.csv")),
+        read(out.join("models/b/envelopes.csv")),
+        read(out.join("envelopes.csv")),
+    );
+    assert_eq!(env.header[..5], ["x_m", "ground_z_m", "rocks_min", "rocks_median", "rocks_max"]);
+    let col = |t: &talus::envelope::profile::Table, name: &str| t.header.iter().position(|h| h == name).unwrap();
+    let (ca, cmax) = (col(&ea, "bounce_p95_m"), col(&env, "bounce_p95_m_max"));
+    let mut both = 0;
+    for ((ra, rb), re) in ea.rows.iter().zip(&eb.rows).zip(&env.rows) {
+        assert_eq!(ra[..2], re[..2]);
+        if let (Ok(x), Ok(y)) = (ra[ca].parse::<f64>(), rb[ca].parse::<f64>()) {
+            both += 1;
+            assert_eq!(re[cmax].parse::<f64>().unwrap(), x.max(y), "station {}", ra[0]);
+        }
+    }
+    assert!(both > 20, "only {both} stations with both models");
+    assert!(out.join("collectors.csv").exists() && out.join("floor/envelopes.csv").exists());
+
+    // The share the first bench catches, over the models and over the floor's seeds.
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("envelope.json")).unwrap()).unwrap();
+    let first: Vec<f64> =
+        summary["models"].as_array().unwrap().iter().map(|m| m["bench_fractions"][1].as_f64().unwrap()).collect();
+    let spread = &summary["bench_fractions"][1];
+    assert_eq!(spread["min"].as_f64().unwrap(), first[0].min(first[1]));
+    assert_eq!(spread["max"].as_f64().unwrap(), first[0].max(first[1]));
+    assert!(summary["floor"]["bench_fractions"][1]["max"].is_number());
+    assert!(std::fs::read_to_string(out.join("envelope.md")).unwrap().contains("seeds alone"));
+
+    // Another station spacing: refused, naming the model and the key.
+    std::fs::write(&paths[1], text.replacen("envelope_spacing_m = 1.0", "envelope_spacing_m = 2.0", 1)).unwrap();
+    let o = envelope(&[&paths[0], &paths[1]], &dir.path().join("bad"), &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("b: envelopes") && err.contains("envelope_spacing_m"), "{err}");
+}

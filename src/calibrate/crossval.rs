@@ -351,7 +351,7 @@ fn repeats_markdown(r: &RepeatedCrossValidation) -> String {
 }
 
 /// The section on the fitted parameters across folds: each fold's value when `per_fold`, then mean ± sd and range;
-/// for a `model` of `3drb`, how to map the fold models.
+/// then how to run the fold models of `model` side by side.
 fn parameters_markdown(s: &mut String, model: &str, spread: &[ParameterSpread], folds: &str, per_fold: bool) {
     use std::fmt::Write as _;
     let Some(first) = spread.first() else { return };
@@ -377,24 +377,25 @@ fn parameters_markdown(s: &mut String, model: &str, spread: &[ParameterSpread], 
         let n = p.values.iter().flatten().count();
         let _ = writeln!(s, "| {} |{cells} {n} | {:.4} ± {:.4} | {:.4} – {:.4} |", p.name, p.mean, p.sd, p.min, p.max);
     }
-    if let Some(models) = fold_models_glob(model, per_fold) {
-        let _ = writeln!(
-            s,
-            "\nWhat the spread does to the maps: `talus envelope {models} --floor --out MAP` (from this folder) runs \
-             these models with one seed and gives each hazard raster's lowest, median and highest value over them, \
-             beside the spread that seeds alone give."
-        );
-    }
+    let what = if model == "2dlm" { "envelope along the profile" } else { "hazard raster" };
+    let _ = writeln!(
+        s,
+        "\nWhat the spread does to the results: `talus envelope {} --floor --out DIR` (from this folder) runs these \
+         models with one seed and gives each {what}'s lowest, median and highest value over them, beside the \
+         spread that seeds alone give.",
+        fold_models_glob(model, per_fold)
+    );
 }
 
-/// The `calibrated.toml` files of a cross-validation's fold models, relative to its output folder (one
-/// cross-validation's when `per_fold`, else every repeat's), for `talus envelope`: `None` for a `model` other than
-/// `3drb`, whose fold models are profile scenarios.
-pub fn fold_models_glob(model: &str, per_fold: bool) -> Option<&'static str> {
-    match (model, per_fold) {
-        ("3drb", true) => Some("fold_*/calibrated.toml"),
-        ("3drb", false) => Some("repeat_*/fold_*/calibrated.toml"),
-        _ => None,
+/// The scenario files of a cross-validation's fold models, relative to its output folder (one cross-validation's
+/// when `per_fold`, else every repeat's), for `talus envelope`: `calibrated.toml` for `3drb`,
+/// `calibrated_profile.toml` for `2dlm`.
+pub fn fold_models_glob(model: &str, per_fold: bool) -> String {
+    let file = if model == "2dlm" { "calibrated_profile.toml" } else { "calibrated.toml" };
+    if per_fold {
+        format!("fold_*/{file}")
+    } else {
+        format!("repeat_*/fold_*/{file}")
     }
 }
 
@@ -495,9 +496,9 @@ mod tests {
             md.contains("| speed_restitution.k_mps | | 6.0000 | 8.0000 | 2 | 7.0000 ± 1.4142 | 6.0000 – 8.0000 |"),
             "{md}"
         );
-        assert!(md.contains("`talus envelope fold_*/calibrated.toml --floor --out MAP`"), "{md}");
+        assert!(md.contains("`talus envelope fold_*/calibrated.toml --floor --out DIR`"), "{md}");
         let mut md = String::new();
-        parameters_markdown(&mut md, "2dlm", &spread, "each of the 3 folds", true);
-        assert!(!md.contains("talus envelope"), "profile models are not `talus run` scenarios: {md}");
+        parameters_markdown(&mut md, "2dlm", &spread, "each of the 3 folds", false);
+        assert!(md.contains("`talus envelope repeat_*/fold_*/calibrated_profile.toml --floor --out DIR`"), "{md}");
     }
 }

@@ -207,12 +207,11 @@ fn print_parameter_spread(spread: &[calibrate::crossval::ParameterSpread]) {
     }
 }
 
-/// How to map a 3DRB cross-validation's fold models (in `out`; one cross-validation's when `per_fold`, else every
-/// repeat's).
+/// How to run a cross-validation's fold models side by side (in `out`; one cross-validation's when `per_fold`, else
+/// every repeat's).
 fn print_fold_maps(model: &str, out: &std::path::Path, per_fold: bool) {
-    if let Some(models) = calibrate::crossval::fold_models_glob(model, per_fold) {
-        println!("the fold models as maps: talus envelope {} --floor --out MAP", out.join(models).display());
-    }
+    let models = out.join(calibrate::crossval::fold_models_glob(model, per_fold));
+    println!("the fold models side by side: talus envelope {} --floor --out DIR", models.display());
 }
 
 /// One line of `set`'s run-out errors, baseline `b` against final `f`.

@@ -3,22 +3,28 @@
 use super::progress;
 use anyhow::Context;
 use clap::Args;
-use std::path::PathBuf;
-use talus::envelope::run_envelope;
+use std::path::{Path, PathBuf};
+use talus::envelope::profile::run_profile_envelope;
+use talus::envelope::{model_names, run_envelope};
+use talus::lumped2d::ProfileScenario;
 use talus::scenario::ScenarioFile;
 
 /// Run several scenarios of one terrain with the same seed and combine their hazard rasters cell by cell: the
 /// lowest, median and highest value over the models (GeoTIFF and PNG), and how many models' rocks reach each
 /// cell. Made for the fold models of `talus calibrate --kfold` (their calibrated.toml files): read beside --floor
 /// (the spread of seeds alone), the maps' spread is the calibration's uncertainty. Writes envelope.md,
-/// envelope.json and each model's run in models/NAME/.
+/// envelope.json and each model's run in models/NAME/. Given 2DLM profile scenarios (a 2DLM calibration's
+/// calibrated_profile.toml files), combines their envelopes.csv and collectors.csv station by station instead,
+/// with the share each bench catches.
 ///
 /// Example:
 ///   talus envelope outputs/cv/fold_*/calibrated.toml --floor --out outputs/cv_envelope
+///   talus envelope outputs/cv_2d/fold_*/calibrated_profile.toml --floor --out outputs/cv_2d_envelope
 #[derive(Debug, Args)]
 #[command(verbatim_doc_comment)]
 pub struct EnvelopeArgs {
-    /// Scenario files (TOML), two or more, all on the same terrain with the same [output] cell_size_m.
+    /// Scenario files (TOML), two or more, all on the same terrain with the same [output] cell_size_m (or all
+    /// profile scenarios on the same profile).
     #[arg(required = true, num_args = 1..)]
     scenarios: Vec<PathBuf>,
     /// Output folder (created if missing).
@@ -34,6 +40,9 @@ pub struct EnvelopeArgs {
 
 pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
     a.control.check()?;
+    if is_profile(&a.scenarios[0]) {
+        return run_profiles(&a);
+    }
     let scenarios = a
         .scenarios
         .iter()
@@ -111,5 +120,65 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
         a.out.display(),
         a.out.join("envelope.md").display()
     );
+    Ok(())
+}
+
+/// Whether `path` is a 2DLM profile scenario (it has a `profile` key); anything else is read as a 3D scenario,
+/// whose reader reports what is wrong with it.
+fn is_profile(path: &Path) -> bool {
+    std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| t.parse::<toml::Table>().ok())
+        .is_some_and(|t| t.contains_key("profile"))
+}
+
+/// `talus envelope` on 2DLM profile scenarios.
+fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
+    let paths: Vec<&Path> = a.scenarios.iter().map(PathBuf::as_path).collect();
+    let mut scenarios = Vec::new();
+    for (path, name) in paths.iter().zip(model_names(&paths)) {
+        let mut sc = ProfileScenario::load(path)?;
+        if let Some(n) = a.control.rocks {
+            if sc.campaign.is_some() {
+                anyhow::bail!("--rocks: {} releases a campaign; set its [campaign] repeats instead", path.display());
+            }
+            sc.rocks = Some(n);
+        }
+        scenarios.push((sc, name));
+    }
+    let seed = a.control.seed.unwrap_or(scenarios[0].0.seed);
+    let go = || {
+        run_profile_envelope(&scenarios, seed, &a.out, a.floor)
+            .with_context(|| format!("combining {} profile models into {}", scenarios.len(), a.out.display()))
+    };
+    #[cfg(feature = "parallel")]
+    let summary = match a.control.threads {
+        Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n).build().context("starting the threads")?.install(go),
+        None => go(),
+    }?;
+    #[cfg(not(feature = "parallel"))]
+    let summary = go()?;
+    let f = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |v| format!("{v:.d$}"));
+    println!("{} profile models with seed {seed}, in {:.1} s", summary.models.len(), summary.wall_time_s);
+    for m in &summary.models {
+        println!(
+            "  {}: {} rocks, run-out median {} m (P95 {} m); highest bounce P95 {} m, energy P95 {} kJ along the profile",
+            m.name,
+            m.rocks,
+            f(m.runout_p50_m, 1),
+            f(m.runout_p95_m, 1),
+            f(m.highest_bounce_p95_m, 2),
+            f(m.highest_kinetic_p95_kj, 1)
+        );
+    }
+    if let Some(b) = summary.bench_fractions.get(1) {
+        let seeds = summary
+            .floor
+            .as_ref()
+            .and_then(|fl| fl.bench_fractions.get(1))
+            .map_or(String::new(), |s| format!(" (seeds alone {}-{})", f(s.min, 3), f(s.max, 3)));
+        println!("first bench catches {}-{} of the rocks over the models{seeds}", f(b.min, 3), f(b.max, 3));
+    }
+    println!("wrote envelopes.csv, collectors.csv and envelope.md to {}", a.out.display());
     Ok(())
 }

@@ -3,6 +3,8 @@
 //! over the models, with the number of models whose rocks reach the cell. Ours: it shows a barrier designer how
 //! far a map moves between models that fit the field data about equally well, in one raster per statistic.
 
+pub mod profile;
+
 use crate::collector::facts::CollectorFacts;
 use crate::error::{Error, Result};
 use crate::raster::Grid;
@@ -233,8 +235,9 @@ pub fn run_envelope(
         ));
     }
     let seed = overrides.seed.unwrap_or(scenarios[0].file.simulation.seed);
+    let paths: Vec<&Path> = scenarios.iter().map(|s| s.path.as_path()).collect();
     let runs: Vec<Member> =
-        scenarios.iter().zip(model_names(scenarios)).map(|(scenario, name)| Member { scenario, name, seed }).collect();
+        scenarios.iter().zip(model_names(&paths)).map(|(scenario, name)| Member { scenario, name, seed }).collect();
     let mut summary = envelope_of(&runs, overrides, out_dir, progress)?;
     if floor {
         let runs: Vec<Member> = (0..n as u64)
@@ -379,26 +382,23 @@ fn write_summary(dir: &Path, summary: &EnvelopeSummary, members: &str) -> Result
 
 /// Model names: the scenario files' stems, else (when those repeat, as `fold_*/calibrated.toml` do) their
 /// folders' names, else the last two or three folders' (`repeat_2_fold_1`), else `model_1`, `model_2`, ...
-fn model_names(scenarios: &[Scenario]) -> Vec<String> {
+pub fn model_names(paths: &[&Path]) -> Vec<String> {
     let unique = |names: &[String]| {
         let mut sorted = names.to_vec();
         sorted.sort();
         sorted.dedup();
         sorted.len() == names.len() && names.iter().all(|n| !n.is_empty())
     };
-    let stems: Vec<String> = scenarios
-        .iter()
-        .map(|s| s.path.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default())
-        .collect();
+    let stems: Vec<String> =
+        paths.iter().map(|p| p.file_stem().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()).collect();
     if unique(&stems) {
         return stems;
     }
     for depth in 1..=3 {
-        let folders: Vec<String> = scenarios
+        let folders: Vec<String> = paths
             .iter()
-            .map(|s| {
-                let parts: Vec<String> = s
-                    .path
+            .map(|path| {
+                let parts: Vec<String> = path
                     .parent()
                     .map(|p| {
                         // Folder names only: never a root or `..`, which would put a model's run outside `models/`.
@@ -417,7 +417,7 @@ fn model_names(scenarios: &[Scenario]) -> Vec<String> {
             return folders;
         }
     }
-    (1..=scenarios.len()).map(|i| format!("model_{i}")).collect()
+    (1..=paths.len()).map(|i| format!("model_{i}")).collect()
 }
 
 /// Rocks that must pass a cell in every run for the cell to count in a [`RasterSpread`] (ours: the 95th
