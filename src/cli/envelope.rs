@@ -147,17 +147,10 @@ fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
         scenarios.push((sc, name));
     }
     let seed = a.control.seed.unwrap_or(scenarios[0].0.seed);
-    let go = || {
+    let summary = super::with_threads(a.control.threads, || {
         run_profile_envelope(&scenarios, seed, &a.out, a.floor)
             .with_context(|| format!("combining {} profile models into {}", scenarios.len(), a.out.display()))
-    };
-    #[cfg(feature = "parallel")]
-    let summary = match a.control.threads {
-        Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n).build().context("starting the threads")?.install(go),
-        None => go(),
-    }?;
-    #[cfg(not(feature = "parallel"))]
-    let summary = go()?;
+    })?;
     let f = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |v| format!("{v:.d$}"));
     println!("{} profile models with seed {seed}, in {:.1} s", summary.models.len(), summary.wall_time_s);
     for m in &summary.models {

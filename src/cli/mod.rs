@@ -44,6 +44,21 @@ impl RunControl {
     }
 }
 
+/// Runs `go` on `threads` threads (all cores when `None`) for the 2DLM commands, whose engine uses rayon's pool.
+pub fn with_threads<T: Send>(
+    threads: Option<usize>,
+    go: impl FnOnce() -> anyhow::Result<T> + Send,
+) -> anyhow::Result<T> {
+    #[cfg(feature = "parallel")]
+    if let Some(n) = threads {
+        use anyhow::Context;
+        return rayon::ThreadPoolBuilder::new().num_threads(n).build().context("starting the threads")?.install(go);
+    }
+    #[cfg(not(feature = "parallel"))]
+    let _ = threads;
+    go()
+}
+
 /// talus: open-source rockfall hazard mapping (3D rigid bodies over real terrain, 2D lumped masses on profiles).
 #[derive(Debug, Parser)]
 #[command(name = "talus", version, about, long_about = None, arg_required_else_help = true)]

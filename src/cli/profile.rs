@@ -36,14 +36,9 @@ pub fn run(a: ProfileArgs) -> anyhow::Result<()> {
     if let Some(s) = a.control.seed {
         scenario.seed = s;
     }
-    let go = || run_profile(&scenario, &a.out).with_context(|| format!("running {}", a.scenario.display()));
-    #[cfg(feature = "parallel")]
-    let summary = match a.control.threads {
-        Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n).build().context("starting the threads")?.install(go),
-        None => go(),
-    }?;
-    #[cfg(not(feature = "parallel"))]
-    let summary = go()?;
+    let summary = super::with_threads(a.control.threads, || {
+        run_profile(&scenario, &a.out).with_context(|| format!("running {}", a.scenario.display()))
+    })?;
     let s = summary.stop_reasons;
     println!(
         "{} rocks in {:.2} s ({:.0} rocks/s): {} stopped, {} left the profile, {} hit the event cap, {} the time cap",
