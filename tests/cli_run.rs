@@ -521,3 +521,43 @@ fn an_envelope_of_profile_models_combines_their_envelopes_station_by_station() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("b: envelopes") && err.contains("envelope_spacing_m"), "{err}");
 }
+
+#[test]
+fn models_carried_to_a_site_run_with_the_sites_terrain_rocks_and_seed_and_their_own_materials() {
+    let dir = tempfile::tempdir().unwrap();
+    let [site, a, b, check] = ["site", "a", "b", "check"].map(|n| dir.path().join(n));
+    for d in [&site, &a, &b, &check] {
+        std::fs::create_dir_all(d).unwrap();
+    }
+    let site_file = scenario(&site, "", 0.3, "[50.0, 500.0]");
+    // The models' own terrain output, sources and seed differ from the site's; only their materials and engine
+    // settings travel.
+    let model = |d: &Path, cr: f64| {
+        let p = scenario(d, "", cr, "[50.0, 500.0]");
+        let text = std::fs::read_to_string(&p).unwrap();
+        std::fs::write(&p, text.replace("count = 24", "count = 5").replace("seed = 3", "seed = 8")).unwrap();
+        p
+    };
+    let (ma, mb) = (model(&a, 0.3), model(&b, 0.5));
+    let out = dir.path().join("env");
+    let o = envelope(&[&ma, &mb], &out, &["--site", site_file.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Model b on the site is the site's scenario with b's restitution, to the byte.
+    let sc = scenario(&check, "", 0.5, "[50.0, 500.0]");
+    let alone = dir.path().join("check_out");
+    let o = talus().args(["run", sc.to_str().unwrap(), "--out", alone.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success());
+    let bytes = |p: PathBuf| std::fs::read(&p).unwrap_or_else(|_| panic!("{} missing", p.display()));
+    assert!(bytes(alone.join("endpoints.csv")) == bytes(out.join("models/b/endpoints.csv")));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("envelope.json")).unwrap()).unwrap();
+    assert!(summary["models"].as_array().unwrap().iter().all(|m| m["seed"] == 3 && m["rocks"] == 24));
+
+    // A model without the site's material: refused, naming the model and the materials.
+    std::fs::write(&mb, std::fs::read_to_string(&mb).unwrap().replace("[materials.default]", "[materials.rock]"))
+        .unwrap();
+    let o = envelope(&[&ma, &mb], &dir.path().join("bad"), &["--site", site_file.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("b/scenario.toml: materials") && err.contains("default") && err.contains("rock"), "{err}");
+}

@@ -5,7 +5,7 @@ use anyhow::Context;
 use clap::Args;
 use std::path::{Path, PathBuf};
 use talus::envelope::profile::run_profile_envelope;
-use talus::envelope::{model_names, run_envelope};
+use talus::envelope::{model_names, on_site, run_envelope};
 use talus::lumped2d::ProfileScenario;
 use talus::scenario::ScenarioFile;
 
@@ -19,6 +19,7 @@ use talus::scenario::ScenarioFile;
 ///
 /// Example:
 ///   talus envelope outputs/cv/fold_*/calibrated.toml --floor --out outputs/cv_envelope
+///   talus envelope outputs/cv/fold_*/calibrated.toml --site my_cutting.toml --floor --out outputs/cutting
 ///   talus envelope outputs/cv_2d/fold_*/calibrated_profile.toml --floor --out outputs/cv_2d_envelope
 #[derive(Debug, Args)]
 #[command(verbatim_doc_comment)]
@@ -34,6 +35,11 @@ pub struct EnvelopeArgs {
     /// random draws alone give at this number of rocks, beside which the models' spread is read.
     #[arg(long)]
     floor: bool,
+    /// Run the models on this site instead: its terrain, sources, rocks, collectors and output settings, with each
+    /// model's materials and [simulation] engine settings (effects included). The site's material names must be
+    /// the models'.
+    #[arg(long)]
+    site: Option<PathBuf>,
     #[command(flatten)]
     control: super::RunControl,
 }
@@ -43,11 +49,17 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
     if is_profile(&a.scenarios[0]) {
         return run_profiles(&a);
     }
-    let scenarios = a
-        .scenarios
-        .iter()
-        .map(|p| ScenarioFile::read(p).and_then(|f| f.resolve(p)))
-        .collect::<talus::Result<Vec<_>>>()?;
+    let paths: Vec<&Path> = a.scenarios.iter().map(PathBuf::as_path).collect();
+    let site = a.site.as_ref().map(|p| ScenarioFile::read(p).map(|f| (f, p))).transpose()?;
+    let mut scenarios = Vec::new();
+    for (path, name) in paths.iter().zip(model_names(&paths)) {
+        let model = ScenarioFile::read(path)?;
+        let scenario = match &site {
+            None => model.resolve(path)?,
+            Some((site, site_path)) => on_site(site, &model, &path.display().to_string())?.resolve(site_path)?,
+        };
+        scenarios.push((scenario, name));
+    }
     let pb = progress::bar(0, "rocks");
     let n = scenarios.len();
     let runs = if a.floor { 2 * n } else { n };
@@ -134,6 +146,9 @@ fn is_profile(path: &Path) -> bool {
 
 /// `talus envelope` on 2DLM profile scenarios.
 fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
+    if a.site.is_some() {
+        anyhow::bail!("--site: carries 3D models to another terrain; for profile models, edit their `profile` instead");
+    }
     let paths: Vec<&Path> = a.scenarios.iter().map(PathBuf::as_path).collect();
     let mut scenarios = Vec::new();
     for (path, name) in paths.iter().zip(model_names(&paths)) {

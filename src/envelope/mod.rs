@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::raster::Grid;
 use crate::report::maps;
 use crate::run::{quantile_sorted, run_scenario_with, RunExtras, RunOverrides, Stats, RASTERS};
-use crate::scenario::Scenario;
+use crate::scenario::{Scenario, ScenarioFile};
 use serde::Serialize;
 use std::path::Path;
 use std::time::Instant;
@@ -29,6 +29,8 @@ pub struct EnvelopeModel {
     pub name: String,
     /// Scenario file.
     pub scenario: String,
+    /// Scenario title.
+    pub title: String,
     /// Seed of its run.
     pub seed: u64,
     /// Rocks run.
@@ -211,22 +213,22 @@ pub fn models_reaching(reach: &[Grid]) -> Grid {
     out
 }
 
-/// Runs every scenario into `out_dir/models/NAME/` with the same seed (`overrides.seed`, else the first
-/// scenario's), so the maps differ by the models alone, then writes each raster's `_min`, `_median` and `_max`
+/// Runs every model (a scenario and its name, see [`model_names`]) into `out_dir/models/NAME/` with the same seed
+/// (`overrides.seed`, else the first scenario's), so the maps differ by the models alone, then writes each raster's `_min`, `_median` and `_max`
 /// over the models (GeoTIFF and PNG), [`REACHING`], `envelope.json` and `envelope.md` into `out_dir`.
 ///
 /// With `floor`, also runs the first scenario once per model with the seeds that follow (`out_dir/floor/`, laid
 /// out the same way): the spread that the random draws alone give at this number of rocks, beside which the
 /// models' spread is read. `progress(run, rocks_done, rocks)` follows the runs (the floor's after the models').
 pub fn run_envelope(
-    scenarios: &[Scenario],
+    models: &[(Scenario, String)],
     overrides: &RunOverrides,
     out_dir: &Path,
     floor: bool,
     progress: &dyn Fn(usize, usize, usize),
 ) -> Result<EnvelopeSummary> {
     let t0 = Instant::now();
-    let n = scenarios.len();
+    let n = models.len();
     if n < 2 {
         return Err(Error::invalid(
             "scenarios",
@@ -234,26 +236,21 @@ pub fn run_envelope(
             "give two or more scenario files, e.g. every fold_*/calibrated.toml of `talus calibrate --kfold`",
         ));
     }
-    let seed = overrides.seed.unwrap_or(scenarios[0].file.simulation.seed);
-    let paths: Vec<&Path> = scenarios.iter().map(|s| s.path.as_path()).collect();
+    let seed = overrides.seed.unwrap_or(models[0].0.file.simulation.seed);
     let runs: Vec<Member> =
-        scenarios.iter().zip(model_names(&paths)).map(|(scenario, name)| Member { scenario, name, seed }).collect();
+        models.iter().map(|(scenario, name)| Member { scenario, name: name.clone(), seed }).collect();
     let mut summary = envelope_of(&runs, overrides, out_dir, progress)?;
     if floor {
         let runs: Vec<Member> = (0..n as u64)
             .map(|i| seed.wrapping_add(i))
-            .map(|s| Member { scenario: &scenarios[0], name: format!("seed_{s}"), seed: s })
+            .map(|s| Member { scenario: &models[0].0, name: format!("seed_{s}"), seed: s })
             .collect();
         let floor_dir = out_dir.join("floor");
         let f = envelope_of(&runs, overrides, &floor_dir, &|i, d, t| progress(n + i, d, t))?;
         write_summary(
             &floor_dir,
             &f,
-            &format!(
-                "the first model, {} with seeds {seed} to {}",
-                runs[0].scenario.path.display(),
-                seed.wrapping_add(n as u64 - 1)
-            ),
+            &format!("the first model, {}, with seeds {seed} to {}", models[0].1, seed.wrapping_add(n as u64 - 1)),
         )?;
         summary.outputs.push("floor/".into());
         summary.floor = Some(FloorSpread { rasters: f.rasters, collectors: f.collectors });
@@ -296,6 +293,7 @@ fn envelope_of(
         models.push(EnvelopeModel {
             name: m.name.clone(),
             scenario: m.scenario.path.display().to_string(),
+            title: m.scenario.file.title.clone(),
             seed: m.seed,
             rocks: s.rocks,
             runout_m: s.runout_m.clone(),
@@ -378,6 +376,33 @@ fn write_summary(dir: &Path, summary: &EnvelopeSummary, members: &str) -> Result
         .map_err(|e| Error::invalid("envelope.json", e.to_string(), "this is a bug: please report it"))?;
     crate::io::write_bytes_atomic(&dir.join("envelope.json"), format!("{json}\n").as_bytes())?;
     crate::io::write_bytes_atomic(&dir.join("envelope.md"), markdown(summary, members).as_bytes())
+}
+
+/// A calibrated model carried to another site: `site` with the materials and engine settings (`[simulation]`, its
+/// effects included) of `model`, keeping the site's seed, rock count and threads. Ours. What a model ties to its
+/// own terrain (a zone the loop found, drawn with the terrain's material polygons) does not carry over: the site's
+/// terrain and zoning are used, so every material the site names must be one of the model's (`model_name` says
+/// which model in the error).
+pub fn on_site(site: &ScenarioFile, model: &ScenarioFile, model_name: &str) -> Result<ScenarioFile> {
+    let missing: Vec<&str> =
+        site.materials.keys().filter(|m| !model.materials.contains_key(*m)).map(String::as_str).collect();
+    if !missing.is_empty() {
+        return Err(Error::invalid(
+            format!("{model_name}: materials"),
+            format!(
+                "the site uses {} that the model does not define (it has {})",
+                missing.join(", "),
+                model.materials.keys().cloned().collect::<Vec<_>>().join(", ")
+            ),
+            "name the site's materials as the model's (a model calibrated with one material calls it `default`: \
+             use materials_by = \"single\" and [materials.default] at the site)",
+        ));
+    }
+    let mut s = site.clone();
+    s.title = format!("{} on {}", model.title, site.title);
+    s.materials = model.materials.clone();
+    s.simulation.params = model.simulation.params.clone();
+    Ok(s)
 }
 
 /// Model names: the scenario files' stems, else (when those repeat, as `fold_*/calibrated.toml` do) their
