@@ -560,4 +560,13 @@ fn models_carried_to_a_site_run_with_the_sites_terrain_rocks_and_seed_and_their_
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("b/scenario.toml: materials") && err.contains("default") && err.contains("rock"), "{err}");
+
+    // The shipped site takes the shipped Tschamut model.
+    let examples = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples");
+    let read = |n: &str| talus::scenario::ScenarioFile::read(&examples.join(n)).unwrap();
+    let carried = talus::envelope::on_site(&read("tyrol_site.toml"), &read("calibrated_tschamut.toml"), "m").unwrap();
+    let sc = carried.resolve(&examples.join("tyrol_site.toml")).unwrap();
+    assert_eq!(sc.materials.len(), 1);
+    let drag = sc.file.simulation.params.effects.vegetation_drag_kg_s;
+    assert!(drag.is_some_and(|c| (c - 8.169).abs() < 1e-3), "the model's effects travel: {drag:?}");
 }
