@@ -512,7 +512,10 @@ fn an_envelope_of_profile_models_combines_their_envelopes_station_by_station() {
     assert_eq!(spread["min"].as_f64().unwrap(), first[0].min(first[1]));
     assert_eq!(spread["max"].as_f64().unwrap(), first[0].max(first[1]));
     assert!(summary["floor"]["bench_fractions"][1]["max"].is_number());
-    assert!(std::fs::read_to_string(out.join("envelope.md")).unwrap().contains("seeds alone"));
+    let md = std::fs::read_to_string(out.join("envelope.md")).unwrap();
+    assert!(md.contains("seeds alone") && md.contains("(bounce_p95_m.svg)"), "{md}");
+    let svg = std::fs::read_to_string(out.join("bounce_p95_m.svg")).unwrap();
+    assert!(svg.contains("models, max") && svg.contains("seeds alone, min"));
 
     // Another station spacing: refused, naming the model and the key.
     std::fs::write(&paths[1], text.replacen("envelope_spacing_m = 1.0", "envelope_spacing_m = 2.0", 1)).unwrap();

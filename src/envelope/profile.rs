@@ -137,8 +137,49 @@ pub fn run_profile_envelope(
         summary.floor = Some(Box::new(f));
     }
     summary.wall_time_s = t0.elapsed().as_secs_f64();
+    write_charts(out_dir, floor)?;
     write_profile_summary(out_dir, &summary)?;
     Ok(summary)
+}
+
+/// The charts of `envelope.md`: bounce height and kinetic energy P95 along the profile, lowest, median and highest
+/// over the models, with the lowest and highest over the floor's seeds when there is a floor.
+const CHARTS: [(&str, &str, &str, f64); 2] = [
+    ("bounce_p95_m", "Bounce height, 95th percentile", "bounce height (m)", 1.0),
+    ("kinetic_p95_j", "Kinetic energy, 95th percentile", "kinetic energy (kJ)", 1e-3),
+];
+
+fn write_charts(dir: &Path, floor: bool) -> Result<()> {
+    use crate::render::colormap::CATEGORICAL;
+    use crate::render::{write_svg, Chart, Series, SeriesStyle};
+    let models = Table::read(&dir.join("envelopes.csv"))?;
+    let seeds = if floor { Some(Table::read(&dir.join("floor").join("envelopes.csv"))?) } else { None };
+    for (column, title, y_label, scale) in CHARTS {
+        let series = |t: &Table, stat: &str| -> Vec<(f64, f64)> {
+            let Some(c) = t.header.iter().position(|h| *h == format!("{column}_{stat}")) else { return Vec::new() };
+            t.rows
+                .iter()
+                .filter_map(|r| Some((r[0].parse::<f64>().ok()?, r.get(c)?.parse::<f64>().ok()? * scale)))
+                .collect()
+        };
+        let mut chart = Chart {
+            title: format!("{title} along the profile"),
+            x_label: "x (m)".into(),
+            y_label: y_label.into(),
+            ..Default::default()
+        };
+        for (stat, colour) in [("max", CATEGORICAL[1]), ("median", CATEGORICAL[0]), ("min", CATEGORICAL[2])] {
+            chart.series.push(Series::new(format!("models, {stat}"), series(&models, stat), SeriesStyle::Line, colour));
+        }
+        if let Some(t) = &seeds {
+            for (stat, colour) in [("max", CATEGORICAL[3]), ("min", CATEGORICAL[4])] {
+                let s = Series::new(format!("seeds alone, {stat}"), series(t, stat), SeriesStyle::Markers, colour);
+                chart.series.push(s);
+            }
+        }
+        write_svg(&dir.join(format!("{column}.svg")), &chart)?;
+    }
+    Ok(())
 }
 
 fn profile_envelope_of(members: &[(&ProfileScenario, String, u64)], out_dir: &Path) -> Result<ProfileEnvelope> {
@@ -221,6 +262,10 @@ fn write_profile_summary(dir: &Path, s: &ProfileEnvelope) -> Result<()> {
             f(m.highest_kinetic_p95_kj, 1),
             f(first, 3)
         );
+    }
+    md += "\n";
+    for (column, title, _, _) in CHARTS {
+        md += &format!("![{title}]({column}.svg)\n");
     }
     if !s.bench_fractions.is_empty() {
         md += "\n| bench | share caught, min / median / max over the runs |";
