@@ -381,8 +381,8 @@ fn parameters_markdown(s: &mut String, model: &str, spread: &[ParameterSpread], 
     let _ = writeln!(
         s,
         "\nWhat the spread does to the results: `talus envelope {} --floor --out DIR` (from this folder) runs these \
-         models with one seed and gives each {what}'s lowest, median and highest value over them, beside the \
-         spread that seeds alone give.",
+         models with one seed and gives, for each {what}, the lowest, median and highest value over them, beside \
+         the spread that seeds alone give.",
         fold_models_glob(model, per_fold)
     );
 }
