@@ -516,6 +516,7 @@ fn an_envelope_of_profile_models_combines_their_envelopes_station_by_station() {
     assert!(md.contains("seeds alone") && md.contains("(bounce_p95_m.svg)"), "{md}");
     let svg = std::fs::read_to_string(out.join("bounce_p95_m.svg")).unwrap();
     assert!(svg.contains("models, max") && svg.contains("seeds alone, min"));
+    assert!(out.join("floor/bounce_p95_m.svg").exists(), "the floor's envelope.md shows its charts too");
 
     // Another station spacing: refused, naming the model and the key.
     std::fs::write(&paths[1], text.replacen("envelope_spacing_m = 1.0", "envelope_spacing_m = 2.0", 1)).unwrap();

@@ -133,6 +133,7 @@ pub fn run_profile_envelope(
         let members: Vec<(&ProfileScenario, String, u64)> =
             (0..n).map(|i| seed.wrapping_add(i)).map(|s| (&scenarios[0].0, format!("seed_{s}"), s)).collect();
         let f = profile_envelope_of(&members, &out_dir.join("floor"))?;
+        write_charts(&out_dir.join("floor"), false)?;
         write_profile_summary(&out_dir.join("floor"), &f)?;
         summary.floor = Some(Box::new(f));
     }
