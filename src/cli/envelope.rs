@@ -166,7 +166,7 @@ fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
         run_profile_envelope(&scenarios, seed, &a.out, a.floor)
             .with_context(|| format!("combining {} profile models into {}", scenarios.len(), a.out.display()))
     })?;
-    let f = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |v| format!("{v:.d$}"));
+    let f = talus::envelope::fmt_opt;
     println!("{} profile models with seed {seed}, in {:.1} s", summary.models.len(), summary.wall_time_s);
     for m in &summary.models {
         println!(

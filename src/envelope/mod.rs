@@ -58,6 +58,11 @@ pub struct Spread3 {
     pub max: Option<f64>,
 }
 
+/// `v` with `decimals` decimals, `-` when there is none (the tables and lines of `talus envelope`).
+pub fn fmt_opt(v: Option<f64>, decimals: usize) -> String {
+    v.map_or("-".to_string(), |v| format!("{v:.decimals$}"))
+}
+
 impl Spread3 {
     /// Over the values that are there.
     pub fn of(values: impl IntoIterator<Item = Option<f64>>) -> Spread3 {
@@ -482,7 +487,7 @@ fn spread(stem: &str, grids: &[Grid], combined: &[Grid; 3], sampled: &[bool]) ->
 /// `envelope.md`; `members` says what was run.
 fn markdown(s: &EnvelopeSummary, members: &str) -> String {
     let n = s.models.len();
-    let opt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.3}"));
+    let opt = |v: Option<f64>| fmt_opt(v, 3);
     let mut md = format!(
         "# Envelope over {n} runs\n\nThe runs: {members}. Each raster of `talus run` is combined cell by cell: \
          `_min`, `_median` and `_max` over the runs with a value in the cell (the energy and height rasters have \
@@ -556,9 +561,7 @@ fn markdown(s: &EnvelopeSummary, members: &str) -> String {
             "\n|---|---|---|---|\n"
         };
         for c in &s.collectors {
-            let three = |x: &Spread3, digits: usize| {
-                [x.min, x.median, x.max].map(|v| v.map_or("-".to_string(), |v| format!("{v:.digits$}"))).join(" / ")
-            };
+            let three = |x: &Spread3, digits: usize| [x.min, x.median, x.max].map(|v| fmt_opt(v, digits)).join(" / ");
             md += &format!(
                 "| {} | {} | {} | {} |",
                 c.name,
@@ -567,9 +570,7 @@ fn markdown(s: &EnvelopeSummary, members: &str) -> String {
                 three(&c.passing_height_m_p95, 2)
             );
             if let Some(f) = s.floor.as_ref().and_then(|f| f.collectors.iter().find(|x| x.name == c.name)) {
-                let two = |x: &Spread3, digits: usize| {
-                    [x.min, x.max].map(|v| v.map_or("-".to_string(), |v| format!("{v:.digits$}"))).join(" – ")
-                };
+                let two = |x: &Spread3, digits: usize| [x.min, x.max].map(|v| fmt_opt(v, digits)).join(" – ");
                 md += &format!(
                     " {} | {} | {} |",
                     two(&f.fraction_crossing, 3),

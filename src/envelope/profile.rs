@@ -241,7 +241,7 @@ fn write_profile_summary(dir: &Path, s: &ProfileEnvelope) -> Result<()> {
     let json = serde_json::to_string_pretty(s)
         .map_err(|e| Error::invalid("envelope.json", e.to_string(), "this is a bug: please report it"))?;
     crate::io::write_bytes_atomic(&dir.join("envelope.json"), format!("{json}\n").as_bytes())?;
-    let f = |v: Option<f64>, d: usize| v.map_or("-".to_string(), |v| format!("{v:.d$}"));
+    let f = super::fmt_opt;
     let mut md = format!(
         "# Envelope over {} profile runs\n\n`envelopes.csv` and `collectors.csv` give each column of the runs' own \
          files (`models/NAME/`) as its lowest, median and highest value over the runs, station by station.\n\n\
