@@ -2,7 +2,8 @@
 
 use nalgebra::{UnitQuaternion, Vector3};
 use std::path::{Path, PathBuf};
-use talus::barrier::{candidates::candidates, propose, CandidateKind, DesignSpec, Status};
+use talus::barrier::design::ModelDesign;
+use talus::barrier::{candidates::candidates, propose, propose_models, Assessment, CandidateKind, DesignSpec, Status};
 use talus::collector::{Collector, CollectorSet, CollectorTrack};
 use talus::random::{stream, uniform, TruncNormal};
 use talus::rock::{RockBody, RockSize, ShapeKind};
@@ -315,12 +316,134 @@ fn barrier_study_ranks_sizes_reruns_and_does_not_depend_on_threads() {
         assert!(best.energy_p95_kj <= c);
     }
     // The re-run keeps the same rocks and puts the proposal in place.
-    let r = study.residual.as_ref().expect("re-run");
+    let m = &study.models[0];
+    let r = m.residual.as_ref().expect("re-run");
     assert_eq!(r.reaching_without, best.rocks_reaching);
     assert!(r.reaching_with <= r.reaching_without);
     assert_eq!(r.reaching_with, r.through + r.over + r.around + r.elsewhere);
-    let with = study.with.as_ref().unwrap();
+    let with = m.with.as_ref().unwrap();
     assert_eq!(with.summary.barriers.len(), 1);
     assert_eq!(with.summary.barriers[0].caught, r.caught);
-    assert_eq!(with.summary.rocks, study.without.summary.rocks);
+    assert_eq!(with.summary.rocks, m.without.summary.rocks);
+}
+
+/// `talus barrier --models`: two models of one site (a bouncier bench floor in the second). The proposal holds the
+/// target in every model, takes the larger height and energy, and each model's runs are its own `talus barrier`
+/// runs; the same model twice sizes exactly as the model alone.
+#[test]
+fn barrier_against_several_models_holds_in_each_and_takes_the_largest_design() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = "[barrier_design]\nmin_rocks = 10\nbest = 3\n";
+    let path_a = small_bench_scenario(dir.path(), spec);
+    let text = std::fs::read_to_string(&path_a).unwrap();
+    let path_b = dir.path().join("bouncy.toml");
+    std::fs::write(&path_b, text.replace("preset = \"floor_all\"", "preset = \"floor_all\"\ncr_mean = 0.4")).unwrap();
+    let (a, b) = (scenario(&path_a), scenario(&path_b));
+    let o = RunOverrides { threads: Some(2), ..Default::default() };
+    let run = |models: &[(&str, &Scenario)], out: &str| {
+        let models: Vec<(String, Scenario)> = models.iter().map(|(n, s)| (n.to_string(), (*s).clone())).collect();
+        propose_models(&models, &o, &dir.path().join(out), &|_| {}, &|_, _| {}).unwrap()
+    };
+    let alone_a = run(&[("a", &a)], "a");
+    let alone_b = run(&[("b", &b)], "b");
+    let both = run(&[("a", &a), ("b", &b)], "ab");
+    let twice = run(&[("a", &a), ("a2", &a)], "aa");
+
+    // The same model twice: every candidate sized as by the model alone.
+    let key = |x: &Assessment| {
+        (x.rank, x.status, x.from_m, x.to_m, x.share, x.fence_height_m.to_bits(), x.energy_max_kj.to_bits(), x.class_kj)
+    };
+    for (x, y) in twice.assessments.iter().zip(&alone_a.assessments) {
+        assert_eq!(key(x), key(y), "{}", x.name);
+    }
+
+    // Each model's runs are its own: the rocks reaching each candidate are those of its study alone.
+    for (k, x) in both.assessments.iter().enumerate() {
+        if x.status != Status::Sized {
+            continue;
+        }
+        assert_eq!(x.per_model[0].rocks_reaching, alone_a.assessments[k].rocks_reaching, "{}", x.name);
+        assert_eq!(x.per_model[1].rocks_reaching, alone_b.assessments[k].rocks_reaching, "{}", x.name);
+        let sizing: Vec<_> = x.per_model.iter().filter(|d| d.sizes).collect();
+        let max = |f: fn(&ModelDesign) -> f64| sizing.iter().map(|d| f(d)).fold(f64::NAN, f64::max);
+        assert_eq!(x.design_height_m, max(|d| d.design_height_m), "{}", x.name);
+        assert_eq!(x.energy_p95_kj, max(|d| d.energy_p95_kj), "{}", x.name);
+        assert_eq!(x.share, sizing.iter().map(|d| d.share).fold(f64::INFINITY, f64::min), "{}", x.name);
+        assert_eq!(
+            x.meets_target,
+            sizing.iter().all(|d| d.share >= a.file.barrier_design.target_share - 1e-12),
+            "{}",
+            x.name
+        );
+        // The run that holds both models is no shorter than either model's own.
+        assert!(x.length_m >= alone_a.assessments[k].length_m.min(alone_b.assessments[k].length_m) - 1e-9);
+        assert!(["a", "b"].contains(&x.height_from.as_str()) && ["a", "b"].contains(&x.energy_from.as_str()));
+    }
+    let best = both.ranked()[0];
+    assert!(best.meets_target, "{}: {}", best.name, best.note);
+    // Re-run under each model with the one barrier; each with-run has it and keeps that model's rocks.
+    let barrier = both.barrier.as_ref().unwrap();
+    assert_eq!(barrier.height_m, best.fence_height_m);
+    for (m, d) in both.models.iter().zip(&best.per_model) {
+        let r = m.residual.as_ref().unwrap();
+        assert_eq!(r.reaching_without, d.rocks_reaching, "{}", m.name);
+        assert!(r.reaching_with <= r.reaching_without);
+        assert_eq!(m.with.as_ref().unwrap().summary.barriers.len(), 1);
+    }
+    for f in ["models/a/without_barrier/summary.json", "models/b/with_barrier/summary.json", "index.html"] {
+        assert!(dir.path().join("ab").join(f).is_file(), "{f} missing");
+    }
+    let md = std::fs::read_to_string(dir.path().join("ab/proposals.md")).unwrap();
+    assert!(md.contains("## The models") && md.contains("(sets the "), "{md}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.path().join("ab/barrier_study.json")).unwrap()).unwrap();
+    assert_eq!(json["models"].as_array().unwrap().len(), 2);
+    assert_eq!(json["proposals"][0]["per_model"].as_array().unwrap().len(), 2);
+}
+
+/// The command line: `--models` files run on the scenario's site; a model without the site's materials is refused
+/// with exit 2, naming the model and the materials.
+#[test]
+fn barrier_models_on_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let site = small_bench_scenario(dir.path(), "[barrier_design]\nmin_rocks = 10\nbest = 2\n");
+    let text = std::fs::read_to_string(&site).unwrap();
+    let m1 = dir.path().join("m1.toml");
+    let m2 = dir.path().join("m2.toml");
+    std::fs::write(&m1, &text).unwrap();
+    std::fs::write(&m2, text.replace("preset = \"face_all\"", "preset = \"face_all\"\ncr_mean = 0.25")).unwrap();
+    let talus = env!("CARGO_BIN_EXE_talus");
+    let out = dir.path().join("study");
+    let run = |models: &[&Path]| {
+        std::process::Command::new(talus)
+            .args(["barrier", site.to_str().unwrap(), "--rocks", "60", "--floor", "--out", out.to_str().unwrap()])
+            .arg("--models")
+            .args(models)
+            .output()
+            .unwrap()
+    };
+    let ok = run(&[&m1, &m2]);
+    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    let stdout = String::from_utf8_lossy(&ok.stdout);
+    assert!(stdout.contains("over 2 models") && stdout.contains("under m2"), "{stdout}");
+    let m1_summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("models/m1/without_barrier/summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(m1_summary["rocks"], 60);
+    // --floor: the first model with its seed and the next, sized alike in OUT/floor/.
+    let seed = m1_summary["seed"].as_u64().unwrap();
+    assert!(stdout.contains("seeds alone"), "{stdout}");
+    let floor_run = |s: u64, kind: &str| {
+        let path = out.join(format!("floor/models/seed_{s}/{kind}/summary.json"));
+        serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(&path).unwrap()).unwrap()
+    };
+    assert!(out.join("floor/index.html").is_file());
+    assert_eq!(floor_run(seed, "without_barrier")["runout_m"], m1_summary["runout_m"], "the floor's first is m1's run");
+    assert_eq!(floor_run(seed + 1, "with_barrier")["seed"], seed + 1);
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, text.replace("[materials.floor]", "[materials.bench]")).unwrap();
+    let err = run(&[&m1, &bad]);
+    assert_eq!(err.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&err.stderr);
+    assert!(e.contains("bad.toml") && e.contains("floor"), "{e}");
 }

@@ -25,6 +25,11 @@
 //! buildability criteria they miss, then by whether they meet the share, then by cost (then length); each missed
 //! criterion is written in the `note` column. Candidates with fewer than `min_rocks` rocks reaching their zone are
 //! listed but not sized (too few to estimate a P95).
+//!
+//! **Several models** (ours; `talus barrier --models`, made for the fold models of `talus calibrate --kfold`). Each
+//! model runs the same rocks; the barrier is the shortest run of stretches that holds the target share in every
+//! model, and its height and class are those of the model that asks most. The design then covers the calibration's
+//! uncertainty as far as the models span it, not the single best fit's figures alone.
 
 use super::candidates::{Candidate, CandidateKind};
 use super::classes::{class_for, class_label, cost};
@@ -169,55 +174,122 @@ pub struct Assessment {
     /// The proposed barrier line (local frame).
     #[serde(skip)]
     pub line_m: Vec<[f64; 2]>,
+    /// The model whose design height governs (see [`assess`]).
+    pub height_from: String,
+    /// The model whose design energy governs.
+    pub energy_from: String,
+    /// Each model's figures on the proposal's stretches (empty if not sized).
+    #[serde(skip)]
+    pub per_model: Vec<ModelDesign>,
 }
 
-/// The shortest run of consecutive stretches (start, count) whose counts add up to `need` (circular if `closed`),
-/// by length; `None` if no run does.
-pub fn shortest_run(counts: &[u32], lengths: &[f64], need: u64, closed: bool) -> Option<(usize, usize)> {
-    let n = counts.len();
-    if n == 0 || need == 0 {
+/// One model's figures on a proposal's stretches (see [`assess`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ModelDesign {
+    /// The model's name.
+    pub model: String,
+    /// Rocks reaching the protected zone in this model (R).
+    pub rocks_reaching: u64,
+    /// Rocks of R intercepted (lower bound).
+    pub intercepted: u64,
+    /// Intercepted / R.
+    pub share: f64,
+    /// Intercepted / all rocks released.
+    pub share_of_released: f64,
+    /// Enough rocks (`min_rocks`) reach the zone for this model to size the barrier.
+    pub sizes: bool,
+    /// Rocks crossing the barrier's stretches.
+    pub rocks_crossing: u64,
+    /// P95 passing height, m.
+    pub passing_height_p95_m: f64,
+    /// Largest passing height, m.
+    pub passing_height_max_m: f64,
+    /// P95 rock size, m.
+    pub rock_size_p95_m: f64,
+    /// P95 passing height + P95 rock size, m.
+    pub design_height_m: f64,
+    /// P95 of the total kinetic energy, kJ.
+    pub energy_p95_kj: f64,
+    /// P99, kJ.
+    pub energy_p99_kj: f64,
+    /// Largest, kJ.
+    pub energy_max_kj: f64,
+    /// The energy the class is chosen by (`class_energy`), kJ.
+    pub design_energy_kj: f64,
+    /// P95 speed, m/s.
+    pub speed_p95_mps: f64,
+    /// Median crossing angle, degrees.
+    pub crossing_angle_p50_deg: f64,
+}
+
+/// One model's run without a barrier, every candidate a collector: what [`assess`] sizes from.
+#[derive(Debug, Clone, Copy)]
+pub struct ModelRun<'a> {
+    /// The model's name.
+    pub name: &'a str,
+    /// The run's collectors (the scenario's, then the candidates).
+    pub collectors: &'a [Collector],
+    /// Their statistics.
+    pub stats: &'a CollectorStats,
+    /// The rocks reaching each candidate's zone, by stretch.
+    pub tally: &'a Tally,
+}
+
+/// The shortest run of consecutive stretches (start, count) that holds, for every model `m`, at least `need[m]` of
+/// `counts[m]` (circular if `closed`), by length; `None` if no run does or nothing is needed.
+pub fn shortest_run(counts: &[&[u32]], lengths: &[f64], need: &[u64], closed: bool) -> Option<(usize, usize)> {
+    let n = lengths.len();
+    if n == 0 || need.iter().all(|&k| k == 0) {
         return None;
     }
     let limit = if closed { 2 * n } else { n };
     let at = |k: usize| k % n;
+    let met = |sum: &[u64]| sum.iter().zip(need).all(|(s, k)| s >= k);
     let mut best: Option<(f64, usize, usize)> = None;
-    let (mut end, mut sum, mut len) = (0usize, 0u64, 0.0f64);
+    let (mut end, mut sum, mut len) = (0usize, vec![0u64; need.len()], 0.0f64);
     for start in 0..n {
         if end < start {
             end = start;
-            sum = 0;
+            sum.iter_mut().for_each(|s| *s = 0);
             len = 0.0;
         }
-        while sum < need && end < limit && end - start < n {
-            sum += counts[at(end)] as u64;
+        while !met(&sum) && end < limit && end - start < n {
+            for (s, c) in sum.iter_mut().zip(counts) {
+                *s += c[at(end)] as u64;
+            }
             len += lengths[at(end)];
             end += 1;
         }
-        if sum >= need && best.is_none_or(|(l, _, _)| len < l - 1e-9) {
+        if met(&sum) && best.is_none_or(|(l, _, _)| len < l - 1e-9) {
             best = Some((len, start, end - start));
         }
-        sum -= counts[at(start)] as u64;
+        for (s, c) in sum.iter_mut().zip(counts) {
+            *s -= c[at(start)] as u64;
+        }
         len -= lengths[at(start)];
     }
     best.map(|(_, s, c)| (s, c))
 }
 
-/// Sizes every candidate and ranks them.
-pub fn assess(
-    candidates: &[Candidate],
-    collectors: &[Collector],
-    stats: &CollectorStats,
-    tally: &Tally,
-    spec: &DesignSpec,
-) -> Vec<Assessment> {
-    let n_released = tally.rocks.max(1) as f64;
+/// Sizes every candidate from one or more models' runs and ranks them.
+///
+/// With several models (the fold models of a calibration: the design against the calibration's uncertainty; ours)
+/// the barrier is the shortest run of stretches that intercepts the target share in every model that sizes (at
+/// least `min_rocks` reach its zone); the share, counts and "meets target" are the worst such model's; the design
+/// height is the largest over them of P95 passing height + P95 rock size (its two terms from that model), each
+/// energy and the speed the largest, the crossing angle that of the model with the largest design energy. With one
+/// model these are its own figures. `per_model` keeps each model's.
+pub fn assess(candidates: &[Candidate], runs: &[ModelRun], spec: &DesignSpec) -> Vec<Assessment> {
     let mut out: Vec<Assessment> = candidates
         .iter()
         .enumerate()
         .map(|(k, cand)| {
-            let ci = tally.offset + k;
-            let col = &collectors[ci];
-            let r = tally.reaching(k);
+            let ci = runs[0].tally.offset + k;
+            let col = &runs[0].collectors[ci];
+            let reaching: Vec<u64> = runs.iter().map(|r| r.tally.reaching(k)).collect();
+            let totals: Vec<u64> = runs.iter().map(|r| r.tally.targeted[k].iter().map(|&c| c as u64).sum()).collect();
+            let min_rocks = spec.min_rocks.max(1) as u64;
+            let sizes: Vec<bool> = reaching.iter().zip(&totals).map(|(&r, &t)| r >= min_rocks && t > 0).collect();
             let mut a = Assessment {
                 candidate: k,
                 name: cand.name.clone(),
@@ -225,7 +297,7 @@ pub fn assess(
                 rank: None,
                 status: Status::TooFewRocks,
                 candidate_length_m: col.length_m(),
-                rocks_reaching: r,
+                rocks_reaching: reaching.iter().copied().max().unwrap_or(0),
                 from_m: 0.0,
                 to_m: 0.0,
                 length_m: 0.0,
@@ -250,22 +322,29 @@ pub fn assess(
                 cost: None,
                 note: String::new(),
                 line_m: Vec::new(),
+                height_from: String::new(),
+                energy_from: String::new(),
+                per_model: Vec::new(),
             };
-            let targeted = &tally.targeted[k];
-            let total: u64 = targeted.iter().map(|&c| c as u64).sum();
-            if r < spec.min_rocks.max(1) as u64 || total == 0 {
-                a.note = format!("{r} rocks reach its protected zone (fewer than {})", spec.min_rocks.max(1));
+            if !sizes.iter().any(|&s| s) {
+                a.note = format!("{} rocks reach its protected zone (fewer than {min_rocks})", a.rocks_reaching);
                 return a;
             }
-            let need = ((spec.target_share * r as f64 - 1e-9).ceil() as u64).max(1);
+            let need = |m: usize| {
+                let n = ((spec.target_share * reaching[m] as f64 - 1e-9).ceil() as u64).max(1);
+                if sizes[m] {
+                    n
+                } else {
+                    0
+                }
+            };
+            let needs: Vec<u64> = (0..runs.len()).map(|m| need(m).min(totals[m])).collect();
             let lengths: Vec<f64> =
                 (0..col.stretch_count()).map(|s| col.stretch_span_m(s)).map(|(a, b)| b - a).collect();
-            let (start, count) = match shortest_run(targeted, &lengths, need.min(total), col.is_closed()) {
-                Some(run) => run,
-                None => (0, col.stretch_count()),
-            };
+            let counts: Vec<&[u32]> = runs.iter().map(|r| r.tally.targeted[k].as_slice()).collect();
+            let (start, count) =
+                shortest_run(&counts, &lengths, &needs, col.is_closed()).unwrap_or((0, col.stretch_count()));
             let stretches: Vec<usize> = (start..start + count).map(|s| s % col.stretch_count()).collect();
-            let intercepted: u64 = stretches.iter().map(|&s| targeted[s] as u64).sum();
             let wraps = start + count > col.stretch_count();
             let (from, to) =
                 (col.stretch_span_m(start).0, col.stretch_span_m((start + count - 1) % col.stretch_count()).1);
@@ -280,28 +359,69 @@ pub fn assess(
             a.to_m = to;
             a.length_m = lengths.iter().enumerate().filter(|(s, _)| stretches.contains(s)).map(|(_, l)| l).sum();
             a.status = Status::Sized;
-            a.intercepted = intercepted;
-            a.share = intercepted as f64 / r as f64;
-            a.share_of_released = intercepted as f64 / n_released;
-            a.meets_target = intercepted >= need;
-            let d = stats.stretch_range_dists(ci, stretches.iter().copied());
-            a.rocks_crossing = d.count() as u64;
-            a.passing_height_p95_m = d.quantile(Quantity::Height, 0.95);
-            a.passing_height_max_m = d.max(Quantity::Height);
-            a.rock_size_p95_m = d.quantile(Quantity::Size, 0.95);
-            a.design_height_m = a.passing_height_p95_m + a.rock_size_p95_m;
-            a.fence_height_m = (a.design_height_m / 0.5).ceil() * 0.5;
-            a.energy_p95_kj = d.quantile(Quantity::Kinetic, 0.95);
-            a.energy_p99_kj = d.quantile(Quantity::Kinetic, 0.99);
-            a.energy_max_kj = d.max(Quantity::Kinetic);
-            a.speed_p95_mps = d.quantile(Quantity::Speed, 0.95);
-            a.crossing_angle_p50_deg = d.quantile(Quantity::Angle, 0.5);
-            let design_energy = match spec.class_energy {
-                ClassEnergy::P95 => a.energy_p95_kj,
-                ClassEnergy::P99 => a.energy_p99_kj,
-                ClassEnergy::Max => a.energy_max_kj,
+            a.per_model = runs
+                .iter()
+                .enumerate()
+                .map(|(m, run)| {
+                    let intercepted: u64 = stretches.iter().map(|&s| run.tally.targeted[k][s] as u64).sum();
+                    let d = run.stats.stretch_range_dists(ci, stretches.iter().copied());
+                    let h95 = d.quantile(Quantity::Height, 0.95);
+                    let size95 = d.quantile(Quantity::Size, 0.95);
+                    let e = [0.95, 0.99].map(|q| d.quantile(Quantity::Kinetic, q));
+                    let e_max = d.max(Quantity::Kinetic);
+                    ModelDesign {
+                        model: run.name.to_string(),
+                        rocks_reaching: reaching[m],
+                        intercepted,
+                        share: intercepted as f64 / reaching[m].max(1) as f64,
+                        share_of_released: intercepted as f64 / run.tally.rocks.max(1) as f64,
+                        sizes: sizes[m],
+                        rocks_crossing: d.count() as u64,
+                        passing_height_p95_m: h95,
+                        passing_height_max_m: d.max(Quantity::Height),
+                        rock_size_p95_m: size95,
+                        design_height_m: h95 + size95,
+                        energy_p95_kj: e[0],
+                        energy_p99_kj: e[1],
+                        energy_max_kj: e_max,
+                        design_energy_kj: match spec.class_energy {
+                            ClassEnergy::P95 => e[0],
+                            ClassEnergy::P99 => e[1],
+                            ClassEnergy::Max => e_max,
+                        },
+                        speed_p95_mps: d.quantile(Quantity::Speed, 0.95),
+                        crossing_angle_p50_deg: d.quantile(Quantity::Angle, 0.5),
+                    }
+                })
+                .collect();
+            let sizing: Vec<(usize, &ModelDesign)> =
+                a.per_model.iter().enumerate().filter(|(m, _)| sizes[*m]).collect();
+            let largest = |f: fn(&ModelDesign) -> f64| {
+                sizing.iter().map(|(_, d)| *d).max_by(|x, y| f(x).total_cmp(&f(y))).expect("a model sizes")
             };
-            a.class = class_for(design_energy, &spec.classes_kj);
+            let worst = largest(|d| -d.share);
+            let tall = largest(|d| d.design_height_m);
+            let strong = largest(|d| d.design_energy_kj);
+            let fold = |f: fn(&ModelDesign) -> f64| sizing.iter().map(|(_, d)| f(d)).fold(f64::NAN, f64::max);
+            a.rocks_reaching = worst.rocks_reaching;
+            a.intercepted = worst.intercepted;
+            a.share = worst.share;
+            a.rocks_crossing = worst.rocks_crossing;
+            a.share_of_released = sizing.iter().map(|(_, d)| d.share_of_released).fold(f64::INFINITY, f64::min);
+            a.meets_target = sizing.iter().all(|(m, d)| d.intercepted >= need(*m));
+            a.passing_height_p95_m = tall.passing_height_p95_m;
+            a.rock_size_p95_m = tall.rock_size_p95_m;
+            a.design_height_m = tall.design_height_m;
+            a.height_from = tall.model.clone();
+            a.passing_height_max_m = fold(|d| d.passing_height_max_m);
+            a.fence_height_m = (a.design_height_m / 0.5).ceil() * 0.5;
+            a.energy_p95_kj = fold(|d| d.energy_p95_kj);
+            a.energy_p99_kj = fold(|d| d.energy_p99_kj);
+            a.energy_max_kj = fold(|d| d.energy_max_kj);
+            a.speed_p95_mps = fold(|d| d.speed_p95_mps);
+            a.crossing_angle_p50_deg = strong.crossing_angle_p50_deg;
+            a.energy_from = strong.model.clone();
+            a.class = class_for(strong.design_energy_kj, &spec.classes_kj);
             a.class_kj = a.class.map(|c| spec.classes_kj[c]);
             a.class_label = class_label(a.class, spec);
             a.cost = cost(a.length_m, a.class, spec);
@@ -359,12 +479,27 @@ mod tests {
     #[test]
     fn shortest_runs_open_and_closed() {
         let l = vec![5.0; 6];
-        assert_eq!(shortest_run(&[0, 3, 0, 5, 1, 0], &l, 6, false), Some((3, 2)));
-        assert_eq!(shortest_run(&[0, 3, 0, 5, 1, 0], &l, 9, false), Some((1, 4)));
-        assert_eq!(shortest_run(&[0, 3, 0, 5, 1, 0], &l, 10, false), None);
-        assert_eq!(shortest_run(&[4, 0, 0, 0, 0, 5], &l, 9, false), Some((0, 6)));
-        assert_eq!(shortest_run(&[4, 0, 0, 0, 0, 5], &l, 9, true), Some((5, 2)));
+        let one = |c: &[u32], l: &[f64], need: u64, closed: bool| shortest_run(&[c], l, &[need], closed);
+        assert_eq!(one(&[0, 3, 0, 5, 1, 0], &l, 6, false), Some((3, 2)));
+        assert_eq!(one(&[0, 3, 0, 5, 1, 0], &l, 9, false), Some((1, 4)));
+        assert_eq!(one(&[0, 3, 0, 5, 1, 0], &l, 10, false), None);
+        assert_eq!(one(&[4, 0, 0, 0, 0, 5], &l, 9, false), Some((0, 6)));
+        assert_eq!(one(&[4, 0, 0, 0, 0, 5], &l, 9, true), Some((5, 2)));
         // Shorter last stretch wins a tie in counts.
-        assert_eq!(shortest_run(&[2, 0, 2], &[5.0, 5.0, 1.0], 2, false), Some((2, 1)));
+        assert_eq!(one(&[2, 0, 2], &[5.0, 5.0, 1.0], 2, false), Some((2, 1)));
+    }
+
+    #[test]
+    fn shortest_run_holds_every_models_need() {
+        let l = vec![5.0; 6];
+        let (a, b): (&[u32], &[u32]) = (&[0, 3, 0, 5, 1, 0], &[4, 0, 0, 0, 1, 1]);
+        // Alone, a needs stretch 3 and b stretch 0; together stretches 0 to 3.
+        assert_eq!(shortest_run(&[a], &l, &[5], false), Some((3, 1)));
+        assert_eq!(shortest_run(&[b], &l, &[4], false), Some((0, 1)));
+        assert_eq!(shortest_run(&[a, b], &l, &[5, 4], false), Some((0, 4)));
+        // A model that needs nothing does not move the run; closed lines wrap.
+        assert_eq!(shortest_run(&[a, b], &l, &[5, 0], false), Some((3, 1)));
+        assert_eq!(shortest_run(&[a, b], &l, &[1, 6], true), Some((4, 3)));
+        assert_eq!(shortest_run(&[a, b], &l, &[0, 0], false), None);
     }
 }

@@ -10,6 +10,9 @@
 //! 4. The best proposal put in the scenario as a barrier and the scenario run again with the same rocks
 //!    (`DIR/with_barrier/`), and the residual compared with the run without it ([`residual`]).
 //! 5. Tables, GeoJSON, maps and `DIR/index.html` ([`report`]).
+//!
+//! With several models of one site ([`propose_models`], `talus barrier --models`), steps 2 and 4 run once per model
+//! (`DIR/models/NAME/without_barrier/`, `.../with_barrier/`) and step 3 sizes against all of them.
 
 pub mod candidates;
 pub mod classes;
@@ -33,6 +36,19 @@ use crate::terrain::frame::local_to_horizontal;
 use crate::terrain::{horizontal_to_local, Terrain};
 use std::path::Path;
 
+/// One model's runs in a study.
+#[derive(Debug, Clone)]
+pub struct ModelStudy {
+    /// The model's name (`scenario` for a study of one scenario).
+    pub name: String,
+    /// The run without the barrier (candidates as collectors).
+    pub without: RunOutput,
+    /// The run with the best proposal in place, if it was run.
+    pub with: Option<RunOutput>,
+    /// The residual, if re-run.
+    pub residual: Option<Residual>,
+}
+
 /// Everything `talus barrier` found.
 #[derive(Debug, Clone)]
 pub struct BarrierStudy {
@@ -40,15 +56,11 @@ pub struct BarrierStudy {
     pub candidates: Vec<Candidate>,
     /// Their assessments, in candidate order (see `rank`).
     pub assessments: Vec<Assessment>,
-    /// The run without the barrier (candidates as collectors).
-    pub without: RunOutput,
-    /// The run with the best proposal in place, if it was run.
-    pub with: Option<RunOutput>,
-    /// The residual, if re-run.
-    pub residual: Option<Residual>,
+    /// Each model's runs, in the order given (one for a study of one scenario).
+    pub models: Vec<ModelStudy>,
     /// The barrier put in the scenario for the re-run (horizontal frame of the terrain files).
     pub barrier: Option<BarrierSpec>,
-    /// Files written into the study folder (not counting the two run folders).
+    /// Files written into the study folder (not counting the run folders).
     pub outputs: Vec<String>,
 }
 
@@ -58,6 +70,16 @@ impl BarrierStudy {
         let mut r: Vec<&Assessment> = self.assessments.iter().filter(|a| a.rank.is_some()).collect();
         r.sort_by_key(|a| a.rank);
         r
+    }
+}
+
+/// Where a model's run of `kind` (`without_barrier`, `with_barrier`) goes: `DIR/kind` for one model,
+/// `DIR/models/NAME/kind` for several.
+pub fn run_folder(n_models: usize, name: &str, kind: &str) -> String {
+    if n_models == 1 {
+        kind.to_string()
+    } else {
+        format!("models/{name}/{kind}")
     }
 }
 
@@ -73,7 +95,23 @@ pub fn protected_zone(spec: &DesignSpec, terrain: &Terrain) -> Option<ProtectedZ
     }
 }
 
-/// Runs the whole study into `out_dir`. `stage` is told what is being done; `progress` gets rocks done / total.
+/// The model `model` once per seed `seed`, `seed + 1`, ... (`n` of them, named `seed_S`): sized with
+/// [`propose_models`] (and overrides without a seed), the design that Monte Carlo noise alone asks for against `n`
+/// models, beside which a design against `n` calibrated models is read (`talus barrier --floor`; ours, as
+/// `talus envelope --floor`).
+pub fn seed_floor(model: &Scenario, seed: u64, n: usize) -> Vec<(String, Scenario)> {
+    (0..n as u64)
+        .map(|i| seed.wrapping_add(i))
+        .map(|s| {
+            let mut sc = model.clone();
+            sc.file.simulation.seed = s;
+            (format!("seed_{s}"), sc)
+        })
+        .collect()
+}
+
+/// Runs the whole study of one scenario into `out_dir`. `stage` is told what is being done; `progress` gets rocks
+/// done / total.
 pub fn propose(
     sc: &Scenario,
     overrides: &RunOverrides,
@@ -81,6 +119,21 @@ pub fn propose(
     stage: &dyn Fn(&str),
     progress: &dyn Fn(usize, usize),
 ) -> Result<BarrierStudy> {
+    propose_models(&[("scenario".to_string(), sc.clone())], overrides, out_dir, stage, progress)
+}
+
+/// Runs the whole study into `out_dir` with several models of one site: named scenarios that differ only in their
+/// materials and engine settings (see [`crate::envelope::on_site`]); the first one's terrain, sources and
+/// `[barrier_design]` are used. Each model runs the same rocks without and with the proposal; the sizing takes
+/// them all ([`design::assess`]).
+pub fn propose_models(
+    models: &[(String, Scenario)],
+    overrides: &RunOverrides,
+    out_dir: &Path,
+    stage: &dyn Fn(&str),
+    progress: &dyn Fn(usize, usize),
+) -> Result<BarrierStudy> {
+    let sc = &models[0].1;
     let spec = &sc.file.barrier_design;
     let terrain = load_terrain(sc)?;
     stage("finding candidate lines");
@@ -97,42 +150,63 @@ pub fn propose(
         candidates.iter().map(|c| Collector::new(c.name.clone(), c.line_m.clone(), spec.segment_m)).collect();
     let offset = crate::collector::scenario_collectors(&sc.file.collectors, &terrain)?.len();
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    let n = models.len();
+    let of_model = |name: &str| if n == 1 { String::new() } else { format!(" (model {name})") };
 
-    stage(&format!("running without a barrier, {} candidate lines as collectors", candidates.len()));
-    let mut tally = design::Tally::new(&cand_cols, offset, zone.is_some());
-    let extras = RunExtras { collectors: cand_cols.clone(), zone: zone.clone() };
-    let without =
-        run_scenario_with(sc, overrides, &out_dir.join("without_barrier"), progress, &extras, &mut |_, r| {
-            tally.add(r, &cand_cols)
-        })?;
-    let assessments =
-        design::assess(&candidates, &without.collectors.collectors, &without.collector_stats, &tally, spec);
+    let mut runs = Vec::new();
+    let mut tallies = Vec::new();
+    for (name, msc) in models {
+        stage(&format!(
+            "running without a barrier{}, {} candidate lines as collectors",
+            of_model(name),
+            cand_cols.len()
+        ));
+        let mut tally = design::Tally::new(&cand_cols, offset, zone.is_some());
+        let extras = RunExtras { collectors: cand_cols.clone(), zone: zone.clone() };
+        let dir = out_dir.join(run_folder(n, name, "without_barrier"));
+        let without = run_scenario_with(msc, overrides, &dir, progress, &extras, &mut |_, r| tally.add(r, &cand_cols))?;
+        runs.push(ModelStudy { name: name.clone(), without, with: None, residual: None });
+        tallies.push(tally);
+    }
+    let model_runs: Vec<design::ModelRun> = runs
+        .iter()
+        .zip(&tallies)
+        .map(|(r, tally)| design::ModelRun {
+            name: &r.name,
+            collectors: &r.without.collectors.collectors,
+            stats: &r.without.collector_stats,
+            tally,
+        })
+        .collect();
+    let assessments = design::assess(&candidates, &model_runs, spec);
 
     let best = assessments.iter().filter(|a| a.rank.is_some()).min_by_key(|a| a.rank).cloned();
-    let (mut with, mut residual, mut barrier) = (None, None, None);
+    let mut barrier = None;
     if let (Some(best), true) = (&best, spec.rerun) {
-        stage(&format!("running again with the proposed barrier on {}", best.name));
         let b = BarrierSpec {
             name: Some(format!("proposed: {}", best.name)),
             line: best.line_m.iter().map(|p| local_to_horizontal(terrain.up, &terrain.origin, *p)).collect(),
             height_m: best.fence_height_m,
             capacity_kj: best.class_kj.unwrap_or(best.energy_max_kj.max(1.0)),
         };
-        let mut sc2 = sc.clone();
-        sc2.file.barriers.push(b.clone());
-        let barrier_index = sc2.file.barriers.len() - 1;
         let cand = cand_cols[best.candidate].clone();
-        let extras2 = RunExtras { collectors: vec![cand.clone()], zone: zone.clone() };
-        let mut res = Residual::new(tally.reaching(best.candidate), zone.is_some(), best.from_m, best.to_m);
-        let out =
-            run_scenario_with(&sc2, overrides, &out_dir.join("with_barrier"), progress, &extras2, &mut |_, r| {
+        for ((name, msc), (run, tally)) in models.iter().zip(runs.iter_mut().zip(&tallies)) {
+            stage(&format!("running again with the proposed barrier on {}{}", best.name, of_model(name)));
+            let mut sc2 = msc.clone();
+            sc2.file.barriers.push(b.clone());
+            let barrier_index = sc2.file.barriers.len() - 1;
+            let extras2 = RunExtras { collectors: vec![cand.clone()], zone: zone.clone() };
+            let mut res = Residual::new(tally.reaching(best.candidate), zone.is_some(), best.from_m, best.to_m);
+            let dir = out_dir.join(run_folder(n, name, "with_barrier"));
+            let out = run_scenario_with(&sc2, overrides, &dir, progress, &extras2, &mut |_, r| {
                 res.add(r, offset as u32, barrier_index as u32)
             })?;
-        with = Some(out);
-        residual = Some(res);
+            run.with = Some(out);
+            run.residual = Some(res);
+        }
         barrier = Some(b);
     }
-    let mut study = BarrierStudy { candidates, assessments, without, with, residual, barrier, outputs: Vec::new() };
+    let mut study = BarrierStudy { candidates, assessments, models: runs, barrier, outputs: Vec::new() };
     stage("writing tables, maps and index.html");
     study.outputs = report::write_study(out_dir, sc, &terrain, &study)?;
     Ok(study)

@@ -5,7 +5,7 @@
 use super::candidates::CandidateKind;
 use super::classes::thousands;
 use super::design::{Assessment, Status};
-use super::BarrierStudy;
+use super::{run_folder, BarrierStudy};
 use crate::error::{Error, Result};
 use crate::io::csv_text::{field, number};
 use crate::io::geojson::{self, Feature, Geometry};
@@ -32,7 +32,7 @@ pub fn kind_name(k: &CandidateKind) -> &'static str {
     }
 }
 
-const CSV_HEAD: &str = "rank,name,kind,candidate_length_m,rocks_reaching,status,from_m,to_m,length_m,intercepted,share,share_of_released,meets_target,rocks_crossing,passing_height_p95_m,passing_height_max_m,rock_size_p95_m,design_height_m,fence_height_m,energy_p95_kj,energy_p99_kj,energy_max_kj,speed_p95_mps,crossing_angle_p50_deg,class_kj,cost,x_from,y_from,x_to,y_to,note";
+const CSV_HEAD: &str = "rank,name,kind,candidate_length_m,rocks_reaching,status,from_m,to_m,length_m,intercepted,share,share_of_released,meets_target,rocks_crossing,passing_height_p95_m,passing_height_max_m,rock_size_p95_m,design_height_m,fence_height_m,energy_p95_kj,energy_p99_kj,energy_max_kj,speed_p95_mps,crossing_angle_p50_deg,class_kj,cost,x_from,y_from,x_to,y_to,height_from,energy_from,note";
 
 fn csv_row(a: &Assessment, terrain: &Terrain) -> String {
     let ends = match (a.line_m.first(), a.line_m.last()) {
@@ -47,7 +47,7 @@ fn csv_row(a: &Assessment, terrain: &Terrain) -> String {
         Status::TooFewRocks => "too_few_rocks",
     };
     format!(
-        "{},{},{},{:.2},{},{status},{:.2},{:.2},{:.2},{},{:.4},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{ends},{}",
+        "{},{},{},{:.2},{},{status},{:.2},{:.2},{:.2},{},{:.4},{:.4},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{ends},{},{},{}",
         a.rank.map_or(String::new(), |r| r.to_string()),
         field(&a.name),
         kind_name(&a.kind),
@@ -73,6 +73,8 @@ fn csv_row(a: &Assessment, terrain: &Terrain) -> String {
         number(a.crossing_angle_p50_deg, 1),
         a.class_kj.map_or(String::new(), |c| format!("{c}")),
         a.cost.map_or(String::new(), |c| format!("{c:.1}")),
+        field(&a.height_from),
+        field(&a.energy_from),
         field(&a.note)
     )
 }
@@ -148,8 +150,9 @@ fn zone_overlay(sc: &Scenario, terrain: &Terrain) -> Option<OverlayLine> {
 pub fn write_study(dir: &Path, sc: &Scenario, terrain: &Terrain, study: &BarrierStudy) -> Result<Vec<String>> {
     let spec = &sc.file.barrier_design;
     let mut out = Vec::new();
-    let crs = study.without.grids[0].crs.clone();
-    let n_rocks = study.without.summary.rocks;
+    let first = &study.models[0];
+    let crs = first.without.grids[0].crs.clone();
+    let n_rocks = first.without.summary.rocks;
 
     // Every candidate, ranked ones first.
     let mut all: Vec<&Assessment> = study.assessments.iter().collect();
@@ -184,7 +187,7 @@ pub fn write_study(dir: &Path, sc: &Scenario, terrain: &Terrain, study: &Barrier
     out.push("proposals.geojson".into());
 
     // Maps.
-    let reach_without = &study.without.grids[1];
+    let reach_without = &first.without.grids[1];
     let dem = maps::dem_for(terrain, reach_without);
     let mut lines: Vec<OverlayLine> =
         study.candidates.iter().map(|c| overlay(terrain, &c.line_m, [95, 95, 95], 1.2, None)).collect();
@@ -215,7 +218,7 @@ pub fn write_study(dir: &Path, sc: &Scenario, terrain: &Terrain, study: &Barrier
     )?;
     out.push("proposals.png".into());
 
-    if let (Some(with), Some(barrier)) = (&study.with, &study.barrier) {
+    if let (Some(with), Some(barrier)) = (&first.with, &study.barrier) {
         let reach_with = &with.grids[1];
         let hi = reach_without.min_max().map_or(1.0, |m| m.1).max(reach_with.min_max().map_or(1.0, |m| m.1));
         let lo = 1.0 / n_rocks.max(1) as f32;
@@ -265,13 +268,22 @@ pub fn write_study(dir: &Path, sc: &Scenario, terrain: &Terrain, study: &Barrier
         "scenario": sc.path.display().to_string(),
         "title": sc.file.title,
         "rocks": n_rocks,
-        "seed": study.without.summary.seed,
+        "seed": first.without.summary.seed,
         "settings": spec,
         "protected_zone": protected_zone_text(sc),
         "candidates": study.candidates.len(),
-        "proposals": best.iter().map(|a| properties(a)).collect::<Vec<_>>(),
+        "proposals": best.iter().map(|a| {
+            let mut p = properties(a);
+            p.insert("per_model".into(), json!(a.per_model));
+            p
+        }).collect::<Vec<_>>(),
         "rerun_barrier": study.barrier,
-        "residual": study.residual,
+        "residual": first.residual,
+        "models": study.models.iter().map(|m| json!({
+            "name": m.name,
+            "title": m.without.summary.title,
+            "residual": m.residual,
+        })).collect::<Vec<_>>(),
     });
     let text = serde_json::to_string_pretty(&json)
         .map_err(|e| Error::invalid("barrier_study.json", e.to_string(), "report this as a bug"))?;
@@ -339,8 +351,13 @@ const PROPOSAL_HEAD: [&str; 9] = [
 /// "A barrier on bench 100 m crest, 50 m long, 3 m high, 500 kJ".
 fn rerun_sentence(study: &BarrierStudy, b: &crate::scenario::BarrierSpec) -> String {
     let best = study.ranked().into_iter().next();
+    let model = if study.models.len() > 1 {
+        format!(" (model {}; every model in the table of the models)", study.models[0].name)
+    } else {
+        String::new()
+    };
     format!(
-        "A barrier on {}, {} m long, {} m high, {} kJ",
+        "A barrier on {}, {} m long, {} m high, {} kJ{model}",
         best.map_or("the best candidate", |a| a.name.as_str()),
         fmt_num(best.map_or(f64::NAN, |a| a.length_m)),
         fmt_num(b.height_m),
@@ -349,7 +366,7 @@ fn rerun_sentence(study: &BarrierStudy, b: &crate::scenario::BarrierSpec) -> Str
 }
 
 fn residual_rows(study: &BarrierStudy) -> Vec<(String, String, String)> {
-    let Some(r) = &study.residual else { return Vec::new() };
+    let Some(r) = &study.models[0].residual else { return Vec::new() };
     let pct = |k: u64| format!("{k} ({:.1} %)", 100.0 * k as f64 / r.rocks.max(1) as f64);
     vec![
         ("rocks reaching the protected zone".into(), pct(r.reaching_without), pct(r.reaching_with)),
@@ -361,15 +378,79 @@ fn residual_rows(study: &BarrierStudy) -> Vec<(String, String, String)> {
     ]
 }
 
+const MODEL_HEAD: [&str; 7] = [
+    "model",
+    "rocks intercepted",
+    "height (m) (P95 pass + rock)",
+    "energy P95 / max (kJ)",
+    "with the barrier: reaching the zone",
+    "caught",
+    "over / through / around",
+];
+
+/// Per model: the best proposal's figures and, if re-run, what still reaches the zone with it in place.
+fn model_rows(study: &BarrierStudy, a: &Assessment) -> Vec<Vec<String>> {
+    a.per_model
+        .iter()
+        .zip(&study.models)
+        .map(|(d, m)| {
+            let governs = [(a.height_from == d.model, "height"), (a.energy_from == d.model, "class")]
+                .iter()
+                .filter(|(g, _)| *g)
+                .map(|(_, w)| *w)
+                .collect::<Vec<_>>();
+            let name = if governs.is_empty() {
+                d.model.clone()
+            } else {
+                format!("{} (sets the {})", d.model, governs.join(", "))
+            };
+            let (reach, caught, past) = match &m.residual {
+                Some(r) => {
+                    let pct = |k: u64| format!("{k} ({:.1} %)", 100.0 * k as f64 / r.rocks.max(1) as f64);
+                    (
+                        format!("{} -> {}", pct(r.reaching_without), pct(r.reaching_with)),
+                        pct(r.caught),
+                        format!("{} / {} / {}", r.over, r.through, r.around),
+                    )
+                }
+                None => ("–".into(), "–".into(), "–".into()),
+            };
+            vec![
+                name,
+                if d.sizes {
+                    format!("{:.1} % of {}", 100.0 * d.share, d.rocks_reaching)
+                } else {
+                    format!("{} reach (too few to size)", d.rocks_reaching)
+                },
+                format!("{} ({} + {})", num(d.design_height_m), num(d.passing_height_p95_m), num(d.rock_size_p95_m)),
+                format!("{} / {}", thousands(d.energy_p95_kj), thousands(d.energy_max_kj)),
+                reach,
+                caught,
+                past,
+            ]
+        })
+        .collect()
+}
+
+/// What the models are, in a sentence.
+fn models_sentence(study: &BarrierStudy) -> String {
+    format!(
+        "{} models run the same rocks: the proposals intercept the target share in every model, with the height and \
+         class of the model that asks most (per model below; maps are the first model's, {}).",
+        study.models.len(),
+        study.models[0].name
+    )
+}
+
 fn markdown(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment]) -> String {
     let spec = &sc.file.barrier_design;
-    let n = study.without.summary.rocks;
+    let n = study.models[0].without.summary.rocks;
     let mut s =
         format!("# Proposed barriers: {}\n\n", if sc.file.title.is_empty() { "talus barrier" } else { &sc.file.title });
     s.push_str(&format!(
         "{} candidate lines, {n} rocks (seed {}). Protected zone: {}. Target: intercept {} % of the rocks reaching it. Class by the {} kinetic energy; cost = length × cost per metre of the class ({}).\n\n",
         study.candidates.len(),
-        study.without.summary.seed,
+        study.models[0].without.summary.seed,
         protected_zone_text(sc),
         fmt_num(100.0 * spec.target_share),
         class_energy_text(sc),
@@ -382,7 +463,19 @@ fn markdown(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment]) -> String
     if best.is_empty() {
         s.push_str("\nNo candidate could be sized: too few rocks reach any candidate's protected zone.\n");
     }
-    if let (Some(b), false) = (&study.barrier, study.residual.is_none()) {
+    if let (Some(a), true) = (best.first(), study.models.len() > 1) {
+        s.push_str(&format!(
+            "\n## The models\n\n{}\n\nProposal #1, {}:\n\n| {} |\n|{}\n",
+            models_sentence(study),
+            a.name,
+            MODEL_HEAD.join(" | "),
+            "---|".repeat(MODEL_HEAD.len())
+        ));
+        for row in model_rows(study, a) {
+            s.push_str(&format!("| {} |\n", row.join(" | ")));
+        }
+    }
+    if let (Some(b), false) = (&study.barrier, study.models[0].residual.is_none()) {
         s.push_str(&format!(
             "\n## With the best barrier in place\n\n{}. The same rocks run again.\n\n| | without | with |\n|---|---|---|\n",
             rerun_sentence(study, b)
@@ -396,16 +489,17 @@ fn markdown(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment]) -> String
 
 fn index_html(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment], files: &[String]) -> String {
     let spec = &sc.file.barrier_design;
-    let n = study.without.summary.rocks;
+    let first = &study.models[0];
+    let n = first.without.summary.rocks;
     let title = format!(
         "Barrier study: {}",
         if sc.file.title.is_empty() { sc.path.display().to_string() } else { sc.file.title.clone() }
     );
     let sub = format!(
         "talus {} · scenario {} · seed {} · {n} rocks per run · {} candidate lines",
-        study.without.summary.talus_version,
+        first.without.summary.talus_version,
         sc.path.display(),
-        study.without.summary.seed,
+        first.without.summary.seed,
         study.candidates.len()
     );
     let mut page = Page::new(&title, &sub);
@@ -434,7 +528,14 @@ fn index_html(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment], files: 
             ]
         )
     ));
-    if let (Some(b), Some(_)) = (&study.barrier, &study.residual) {
+    if let (Some(a), true) = (best.first(), study.models.len() > 1) {
+        page.h2("The models");
+        page.note(&models_sentence(study));
+        let rows: Vec<Vec<String>> =
+            model_rows(study, a).into_iter().map(|r| r.iter().map(|c| escape(c)).collect()).collect();
+        page.raw(&table(&MODEL_HEAD, &rows, &[0], &[0]));
+    }
+    if let (Some(b), Some(_)) = (&study.barrier, &first.residual) {
         page.h2("With the best barrier in place");
         page.raw(&format!("<p class=\"big\">{}. The same rocks run again.</p>", escape(&rerun_sentence(study, b))));
         let rows: Vec<Vec<String>> =
@@ -446,13 +547,13 @@ fn index_html(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment], files: 
                 "reach_probability_without.png",
                 "Without the barrier",
                 "reach probability.",
-                &[("run", "without_barrier/index.html".into())]
+                &[("run", format!("{}/index.html", run_folder(study.models.len(), &first.name, "without_barrier")))]
             ),
             figure(
                 "reach_probability_with.png",
                 "With the barrier",
                 "reach probability, same colour scale.",
-                &[("run", "with_barrier/index.html".into())]
+                &[("run", format!("{}/index.html", run_folder(study.models.len(), &first.name, "with_barrier")))]
             ),
             figure(
                 "reach_probability_reduction.png",
@@ -463,9 +564,16 @@ fn index_html(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment], files: 
         ));
     }
     page.h2("Runs");
-    page.raw("<ul><li><a href=\"without_barrier/index.html\">without the barrier</a> (every candidate is a collector line: <a href=\"without_barrier/collectors.csv\">collectors.csv</a>)</li>");
-    if study.with.is_some() {
-        page.raw("<li><a href=\"with_barrier/index.html\">with the barrier</a></li>");
+    page.raw("<ul>");
+    for m in &study.models {
+        let of = if study.models.len() > 1 { format!("{}: ", escape(&m.name)) } else { String::new() };
+        let without = run_folder(study.models.len(), &m.name, "without_barrier");
+        page.raw(&format!("<li>{of}<a href=\"{without}/index.html\">without the barrier</a> (every candidate is a collector line: <a href=\"{without}/collectors.csv\">collectors.csv</a>)"));
+        if m.with.is_some() {
+            let with = run_folder(study.models.len(), &m.name, "with_barrier");
+            page.raw(&format!(", <a href=\"{with}/index.html\">with the barrier</a>"));
+        }
+        page.raw("</li>");
     }
     page.raw("</ul>");
     page.h2("Files");

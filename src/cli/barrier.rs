@@ -3,18 +3,23 @@
 use super::progress;
 use anyhow::Context;
 use clap::Args;
-use std::path::PathBuf;
-use talus::barrier::{propose, Status};
+use std::path::{Path, PathBuf};
+use talus::barrier::{propose_models, seed_floor, Status};
+use talus::envelope::{model_names, on_site};
+use talus::run::RunOverrides;
 use talus::scenario::ScenarioFile;
 
 /// Propose rockfall barrier positions: candidate lines (contours, bench crests and toes, offsets of a toe or asset
 /// line) are sized from one run (length to intercept the target share of rocks, fence height, energy class, cost)
 /// and ranked; the scenario is run again with the best one in place to show what still passes. Settings:
-/// [barrier_design] in the scenario (see docs/barrier.md).
+/// [barrier_design] in the scenario (see docs/barrier.md). With --models (the fold models of `talus calibrate
+/// --kfold`), each model runs the same rocks on the scenario's site and the barrier must hold in every one: its
+/// length meets the target share in each, its height and class are those of the model that asks most.
 ///
 /// Example:
 ///   talus barrier examples/bench_stack.toml --out outputs/bench_barrier
 ///   talus barrier examples/tyrol.toml --out outputs/tyrol_barrier --target-share 0.95
+///   talus barrier my_site.toml --models outputs/cv/fold_*/calibrated.toml --out outputs/site_barrier
 #[derive(Debug, Args)]
 #[command(verbatim_doc_comment)]
 pub struct BarrierArgs {
@@ -37,6 +42,15 @@ pub struct BarrierArgs {
     /// Also write every raster as an ESRI ASCII grid.
     #[arg(long)]
     ascii_grids: bool,
+    /// Calibrated models (scenario files) to design against: each runs on the scenario's terrain, sources, rocks
+    /// and [barrier_design] with its own materials and [simulation] engine settings (as `talus envelope --site`).
+    /// The scenario's material names must be the models'.
+    #[arg(long, num_args = 1..)]
+    models: Vec<PathBuf>,
+    /// With --models: also size against the first model run once per model with the seeds that follow (in
+    /// OUT/floor/): the design Monte Carlo noise alone asks for, beside which the models' design is read.
+    #[arg(long, requires = "models")]
+    floor: bool,
 }
 
 pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
@@ -53,6 +67,15 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
     let sc = file
         .resolve(&a.scenario)
         .map_err(|e| anyhow::anyhow!("{e}\n  (command-line values are checked as barrier_design.* keys)"))?;
+    let mut models = Vec::new();
+    let paths: Vec<&Path> = a.models.iter().map(PathBuf::as_path).collect();
+    for (path, name) in paths.iter().zip(model_names(&paths)) {
+        let model = ScenarioFile::read(path)?;
+        models.push((name, on_site(&sc.file, &model, &path.display().to_string())?.resolve(&a.scenario)?));
+    }
+    if models.is_empty() {
+        models.push(("scenario".to_string(), sc.clone()));
+    }
     let overrides = a.control.overrides(None);
     let pb = progress::bar(0, "rocks");
     let stage = |s: &str| {
@@ -69,8 +92,24 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
         }
         pb.set_position(done as u64);
     };
-    let study = propose(&sc, &overrides, &a.out, &stage, &progress)
+    let study = propose_models(&models, &overrides, &a.out, &stage, &progress)
         .with_context(|| format!("talus barrier {}", a.scenario.display()))?;
+    let floor = if a.floor {
+        let seed = a.control.seed.unwrap_or(sc.file.simulation.seed);
+        let seeds = seed_floor(&models[0].1, seed, models.len());
+        stage(&format!(
+            "the floor: model {} with seeds {seed} to {}",
+            models[0].0,
+            seeds.last().map_or(seed, |s| s.1.file.simulation.seed)
+        ));
+        let o = RunOverrides { seed: None, ..overrides.clone() };
+        Some(
+            propose_models(&seeds, &o, &a.out.join("floor"), &stage, &progress)
+                .with_context(|| format!("talus barrier {} --floor", a.scenario.display()))?,
+        )
+    } else {
+        None
+    };
     pb.finish_and_clear();
     let ranked = study.ranked();
     let sized = study.assessments.iter().filter(|x| x.status == Status::Sized).count();
@@ -93,9 +132,33 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
             x.cost.map_or("-".to_string(), |c| format!("{c:.0}"))
         );
     }
-    if let (Some(r), Some(b)) = (&study.residual, &study.barrier) {
+    if let (Some(best), true) = (ranked.first(), models.len() > 1) {
         println!(
-            "with {} ({} m, {} kJ): rocks reaching the protected zone {} ({:.1} %) -> {} ({:.1} %); caught {}, through {}, over {}, around {}",
+            "#1 over {} models: height set by {}, class by {}; worst share {:.1} %",
+            models.len(),
+            best.height_from,
+            best.energy_from,
+            100.0 * best.share
+        );
+    }
+    if let (Some(best), Some(floor)) = (ranked.first(), &floor) {
+        let same = &floor.assessments[best.candidate];
+        let design = |x: &talus::barrier::Assessment| {
+            format!("{:.0} m, {:.1} m, {}", x.length_m, x.fence_height_m, x.class_label)
+        };
+        println!(
+            "seeds alone ({}): {} needs {}; their own #1: {}",
+            a.out.join("floor").display(),
+            best.name,
+            design(same),
+            floor.ranked().first().map_or("none".to_string(), |x| format!("{} ({})", x.name, design(x)))
+        );
+    }
+    for m in &study.models {
+        let (Some(r), Some(b)) = (&m.residual, &study.barrier) else { continue };
+        let of = if models.len() > 1 { format!(" under {}", m.name) } else { String::new() };
+        println!(
+            "with {} ({} m, {} kJ){of}: rocks reaching the protected zone {} ({:.1} %) -> {} ({:.1} %); caught {}, through {}, over {}, around {}",
             b.name.as_deref().unwrap_or("the barrier"),
             b.height_m,
             b.capacity_kj,
