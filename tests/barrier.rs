@@ -447,3 +447,19 @@ fn barrier_models_on_the_command_line() {
     let e = String::from_utf8_lossy(&err.stderr);
     assert!(e.contains("bad.toml") && e.contains("floor"), "{e}");
 }
+
+/// The shipped Tschamut barrier site reads, takes the shipped calibrated model (what `--models` does with a fold
+/// model) and has candidates, its road's offsets among them.
+#[test]
+fn the_shipped_tschamut_barrier_site_takes_a_calibrated_model() {
+    let site_path = root().join("examples/barrier_tschamut.toml");
+    let site = ScenarioFile::read(&site_path).unwrap();
+    let model = ScenarioFile::read(&root().join("examples/calibrated_tschamut.toml")).unwrap();
+    let sc = talus::envelope::on_site(&site, &model, "calibrated").unwrap().resolve(&site_path).unwrap();
+    assert_eq!(sc.file.barrier_design.asset_line.len(), 2);
+    let terrain = load_terrain(&sc).unwrap();
+    let cands = candidates(&terrain, &sc.file.barrier_design, sc.file.output.cell_size_m);
+    let offsets = cands.iter().filter(|c| matches!(c.kind, CandidateKind::AssetOffset { .. })).count();
+    assert_eq!(offsets, 3, "{:?}", cands.iter().map(|c| &c.name).collect::<Vec<_>>());
+    assert!(cands.len() > 20);
+}

@@ -275,10 +275,10 @@ pub fn shortest_run(counts: &[&[u32]], lengths: &[f64], need: &[u64], closed: bo
 ///
 /// With several models (the fold models of a calibration: the design against the calibration's uncertainty; ours)
 /// the barrier is the shortest run of stretches that intercepts the target share in every model that sizes (at
-/// least `min_rocks` reach its zone); the share, counts and "meets target" are the worst such model's; the design
-/// height is the largest over them of P95 passing height + P95 rock size (its two terms from that model), each
-/// energy and the speed the largest, the crossing angle that of the model with the largest design energy. With one
-/// model these are its own figures. `per_model` keeps each model's.
+/// least `min_rocks` reach its zone); the shares and counts are the worst such model's (lowest share), "meets
+/// target" holds if it holds in each; the design height is the largest over them of P95 passing height + P95 rock
+/// size (its two terms from that model), each energy and the speed the largest, the crossing angle that of the
+/// model with the largest design energy. With one model these are its own figures. `per_model` keeps each model's.
 pub fn assess(candidates: &[Candidate], runs: &[ModelRun], spec: &DesignSpec) -> Vec<Assessment> {
     let mut out: Vec<Assessment> = candidates
         .iter()
@@ -407,7 +407,7 @@ pub fn assess(candidates: &[Candidate], runs: &[ModelRun], spec: &DesignSpec) ->
             a.intercepted = worst.intercepted;
             a.share = worst.share;
             a.rocks_crossing = worst.rocks_crossing;
-            a.share_of_released = sizing.iter().map(|(_, d)| d.share_of_released).fold(f64::INFINITY, f64::min);
+            a.share_of_released = worst.share_of_released;
             a.meets_target = sizing.iter().all(|(m, d)| d.intercepted >= need(*m));
             a.passing_height_p95_m = tall.passing_height_p95_m;
             a.rock_size_p95_m = tall.rock_size_p95_m;
