@@ -352,7 +352,7 @@ fn an_envelope_combines_models_run_with_one_seed_and_measures_the_seeds_alone() 
     // b's own seed differs: the envelope runs both with a's.
     std::fs::write(&sb, std::fs::read_to_string(&sb).unwrap().replace("seed = 3", "seed = 11")).unwrap();
     let out = dir.path().join("env");
-    let o = envelope(&[&sa, &sb], &out, &["--floor", "--rocks", "120"]);
+    let o = envelope(&[&sa, &sb], &out, &["--floor", "--rocks", "120", "--ascii-grids"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("2 models, 120 rocks each with seed 3") && stdout.contains("seeds alone"), "{stdout}");
@@ -392,6 +392,14 @@ fn an_envelope_combines_models_run_with_one_seed_and_measures_the_seeds_alone() 
         }
         assert!(both > 10, "{stem}: only {both} cells with both models");
     }
+    // --ascii-grids: the combined rasters also as ESRI ASCII grids, the same values (to the digits written).
+    let tif = read_grid(&out.join("bounce_height_max_m_max.tif"));
+    let asc = talus::io::ascii_grid::read_grid(&out.join("bounce_height_max_m_max.asc")).unwrap();
+    assert_eq!((asc.ncols, asc.nrows), (tif.ncols, tif.nrows));
+    for (x, y) in tif.values.iter().zip(&asc.values) {
+        assert!(x.is_nan() == y.is_nan() && (x.is_nan() || (x - y).abs() <= 1e-4 * (1.0 + x.abs())), "{x} {y}");
+    }
+    assert!(out.join("models/a/reach_probability.asc").is_file() && out.join("floor/models_reaching.asc").is_file());
     let reaching = read_grid(&out.join("models_reaching.tif"));
     assert!(reaching.values.iter().all(|v| v.is_nan() || [0.0, 1.0, 2.0].contains(v)));
     assert!(reaching.values.contains(&2.0));

@@ -40,6 +40,10 @@ pub struct EnvelopeArgs {
     /// the models'.
     #[arg(long)]
     site: Option<PathBuf>,
+    /// Also write every raster (the models' and the combined ones) as an ESRI ASCII grid (as `[output]
+    /// ascii_grids = true` in the first scenario, or in the site).
+    #[arg(long)]
+    ascii_grids: bool,
     #[command(flatten)]
     control: super::RunControl,
 }
@@ -54,10 +58,11 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
     let mut scenarios = Vec::new();
     for (path, name) in paths.iter().zip(model_names(&paths)) {
         let model = ScenarioFile::read(path)?;
-        let scenario = match &site {
+        let mut scenario = match &site {
             None => model.resolve(path)?,
             Some((site, site_path)) => on_site(site, &model, &path.display().to_string())?.resolve(site_path)?,
         };
+        scenario.file.output.ascii_grids |= a.ascii_grids;
         scenarios.push((scenario, name));
     }
     let pb = progress::bar(0, "rocks");
@@ -148,6 +153,9 @@ fn is_profile(path: &Path) -> bool {
 fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
     if a.site.is_some() {
         anyhow::bail!("--site: carries 3D models to another terrain; for profile models, edit their `profile` instead");
+    }
+    if a.ascii_grids {
+        anyhow::bail!("--ascii-grids: profile models give tables (envelopes.csv), not rasters; leave it out");
     }
     let paths: Vec<&Path> = a.scenarios.iter().map(PathBuf::as_path).collect();
     let mut scenarios = Vec::new();

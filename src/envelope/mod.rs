@@ -318,10 +318,18 @@ fn envelope_of(
     let overlays = maps::run_overlays(&first.terrain, &[], &[]);
     let n = members.len();
     let mut outputs = Vec::new();
+    let ascii = members[0].scenario.file.output.ascii_grids;
     let mut write = |stem: String, grid: &Grid, style: &maps::Style| -> Result<()> {
         crate::io::geotiff::write_grid(&out_dir.join(format!("{stem}.tif")), grid)?;
         maps::render(&out_dir.join(format!("{stem}.png")), grid, style, Some(&dem), &overlays)?;
         outputs.extend([format!("{stem}.tif"), format!("{stem}.png")]);
+        if ascii {
+            crate::io::ascii_grid::write_grid(&out_dir.join(format!("{stem}.asc")), grid)?;
+            outputs.push(format!("{stem}.asc"));
+            if grid.crs.wkt.is_some() {
+                outputs.push(format!("{stem}.prj"));
+            }
+        }
         Ok(())
     };
     // Read back one raster of every model at a time: memory holds one raster per model, not six.
