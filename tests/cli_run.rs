@@ -400,6 +400,21 @@ fn an_envelope_combines_models_run_with_one_seed_and_measures_the_seeds_alone() 
         assert!(x.is_nan() == y.is_nan() && (x.is_nan() || (x - y).abs() <= 1e-4 * (1.0 + x.abs())), "{x} {y}");
     }
     assert!(out.join("models/a/reach_probability.asc").is_file() && out.join("floor/models_reaching.asc").is_file());
+    // The zoning: the highest level any model gives each cell, and the cells where the models' levels differ.
+    let [za, zb] = ["a", "b"].map(|m| read_grid(&out.join(format!("models/{m}/hazard_zones.tif"))));
+    let zmax = read_grid(&out.join("hazard_zones_max.tif"));
+    let mut differing = 0;
+    for k in 0..za.values.len() {
+        let (x, y) = (za.values[k], zb.values[k]);
+        if !x.is_nan() {
+            assert_eq!(zmax.values[k], x.max(y), "zone cell {k}");
+            differing += (x != y) as usize;
+        }
+    }
+    let summary_json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("envelope.json")).unwrap()).unwrap();
+    assert_eq!(summary_json["zones"]["cells_differing"], differing);
+    assert!(summary_json["floor"]["zones"]["cells_zoned"].as_u64().unwrap() > 0);
     let reaching = read_grid(&out.join("models_reaching.tif"));
     assert!(reaching.values.iter().all(|v| v.is_nan() || [0.0, 1.0, 2.0].contains(v)));
     assert!(reaching.values.contains(&2.0));

@@ -118,6 +118,28 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
         (Some(lo), Some(hi)) => format!("{lo:.digits$}-{hi:.digits$}"),
         _ => "-".to_string(),
     };
+    let zones = |z: &talus::envelope::ZoneSpread| {
+        let ha = |x: &talus::envelope::Spread3| {
+            range(
+                &talus::envelope::Spread3 { min: x.min.map(|v| v / 1e4), median: None, max: x.max.map(|v| v / 1e4) },
+                2,
+            )
+        };
+        let pct =
+            |d: usize, n: usize| if n == 0 { "-".to_string() } else { format!("{:.1} %", 100.0 * d as f64 / n as f64) };
+        format!(
+            "high {} ha, medium {} ha, low {} ha; level differs on {} of zoned cells ({} of well-sampled ones)",
+            ha(&z.high_m2),
+            ha(&z.medium_m2),
+            ha(&z.low_m2),
+            pct(z.cells_differing, z.cells_zoned),
+            pct(z.well_sampled_differing, z.well_sampled_zoned)
+        )
+    };
+    println!("hazard zones over the models: {}", zones(&summary.zones));
+    if let Some(f) = &summary.floor {
+        println!("  seeds alone: {}", zones(&f.zones));
+    }
     for c in &summary.collectors {
         let floor = summary.floor.as_ref().and_then(|f| f.collectors.iter().find(|x| x.name == c.name));
         let seeds = floor.map_or(String::new(), |f| {

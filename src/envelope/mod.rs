@@ -22,6 +22,9 @@ pub const STATISTICS: [&str; 3] = ["min", "median", "max"];
 /// File stem of the raster counting the models whose rocks reach each cell.
 pub const REACHING: &str = "models_reaching";
 
+/// File stem of a run's hazard zone levels, combined into `_min` and `_max` (see [`ZoneSpread`]).
+pub const ZONES: &str = "hazard_zones";
+
 /// One model of an envelope, as it ran.
 #[derive(Debug, Clone, Serialize)]
 pub struct EnvelopeModel {
@@ -108,6 +111,48 @@ pub struct RasterSpread {
     pub highest_max: Option<f64>,
 }
 
+/// How the hazard zones of the runs (`hazard_zones.tif`: 0 not reached, 1 low, 2 medium, 3 high) differ.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct ZoneSpread {
+    /// Area of the low (yellow) zone over the runs, m²: lowest, median, highest.
+    pub low_m2: Spread3,
+    /// Area of the medium (blue) zone, m².
+    pub medium_m2: Spread3,
+    /// Area of the high (red) zone, m².
+    pub high_m2: Spread3,
+    /// Cells that some run puts in a zone (level 1 or more).
+    pub cells_zoned: usize,
+    /// Of those, the cells whose level is not the same in every run.
+    pub cells_differing: usize,
+    /// Of the zoned cells, those that at least [`WELL_SAMPLED_ROCKS`] rocks of every run reach.
+    pub well_sampled_zoned: usize,
+    /// Of those, the cells whose level is not the same in every run.
+    pub well_sampled_differing: usize,
+}
+
+/// The zone levels of the runs compared cell by cell (`sampled`: the well-sampled cells).
+pub fn zone_spread(levels: &[Grid], sampled: &[bool]) -> ZoneSpread {
+    let cell_m2 = levels.first().map_or(0.0, |g| g.cell_x_m * g.cell_y_m);
+    let area = |level: f32| {
+        Spread3::of(levels.iter().map(|g| Some(g.values.iter().filter(|&&v| v == level).count() as f64 * cell_m2)))
+    };
+    let mut z = ZoneSpread { low_m2: area(1.0), medium_m2: area(2.0), high_m2: area(3.0), ..Default::default() };
+    for k in 0..sampled.len() {
+        let v: Vec<f32> = levels.iter().map(|g| g.values[k]).collect();
+        if v.iter().any(|x| x.is_nan()) || v.iter().all(|&x| x < 1.0) {
+            continue;
+        }
+        let differs = v.iter().any(|&x| x != v[0]);
+        z.cells_zoned += 1;
+        z.cells_differing += differs as usize;
+        if sampled[k] {
+            z.well_sampled_zoned += 1;
+            z.well_sampled_differing += differs as usize;
+        }
+    }
+    z
+}
+
 /// What `talus envelope` writes as `envelope.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct EnvelopeSummary {
@@ -117,6 +162,8 @@ pub struct EnvelopeSummary {
     pub models: Vec<EnvelopeModel>,
     /// Each raster's spread between the models.
     pub rasters: Vec<RasterSpread>,
+    /// How the hazard zones differ between the models.
+    pub zones: ZoneSpread,
     /// The collector lines every run has, over the runs.
     pub collectors: Vec<CollectorSpread>,
     /// With `--floor`: the first model's runs with other seeds, summarised alike.
@@ -132,6 +179,8 @@ pub struct EnvelopeSummary {
 pub struct FloorSpread {
     /// Each raster's spread.
     pub rasters: Vec<RasterSpread>,
+    /// The hazard zones'.
+    pub zones: ZoneSpread,
     /// Each collector line's.
     pub collectors: Vec<CollectorSpread>,
 }
@@ -258,7 +307,7 @@ pub fn run_envelope(
             &format!("the first model, {}, with seeds {seed} to {}", models[0].1, seed.wrapping_add(n as u64 - 1)),
         )?;
         summary.outputs.push("floor/".into());
-        summary.floor = Some(FloorSpread { rasters: f.rasters, collectors: f.collectors });
+        summary.floor = Some(FloorSpread { rasters: f.rasters, zones: f.zones, collectors: f.collectors });
     }
     summary.wall_time_s = t0.elapsed().as_secs_f64();
     write_summary(out_dir, &summary, &format!("{n} models, each with seed {seed}"))?;
@@ -371,12 +420,20 @@ fn envelope_of(
         }
         rasters.push(spread(stem, &grids, &combined, &sampled));
     }
+    let levels = read(ZONES)?;
+    let [lowest, _, highest] = combine(&levels, &names)?;
+    let style = crate::report::zone_style(members[0].scenario);
+    for (stat, grid, which) in [("min", &lowest, "lowest"), ("max", &highest, "highest")] {
+        let title = format!("{} ({which} level of {n} models)", style.title);
+        write(format!("{ZONES}_{stat}"), grid, &maps::Style { title, ..style.clone() })?;
+    }
     outputs.extend(["envelope.json".to_string(), "envelope.md".to_string()]);
     Ok(EnvelopeSummary {
         talus_version: env!("CARGO_PKG_VERSION").to_string(),
         collectors: collector_spread(&models),
         models,
         rasters,
+        zones: zone_spread(&levels, &sampled),
         floor: None,
         wall_time_s: t0.elapsed().as_secs_f64(),
         outputs,
@@ -492,6 +549,59 @@ fn spread(stem: &str, grids: &[Grid], combined: &[Grid; 3], sampled: &[bool]) ->
     }
 }
 
+/// The hazard zones' section of `envelope.md`.
+fn zones_markdown(s: &EnvelopeSummary) -> String {
+    let ha = |x: &Spread3, all: bool| {
+        let v = if all { vec![x.min, x.median, x.max] } else { vec![x.min, x.max] };
+        v.into_iter().map(|v| fmt_opt(v.map(|m2| m2 / 1e4), 2)).collect::<Vec<_>>().join(if all {
+            " / "
+        } else {
+            " – "
+        })
+    };
+    let share = |differing: usize, zoned: usize| {
+        format!("{differing} of {zoned} ({})", fmt_opt((zoned > 0).then(|| 100.0 * differing as f64 / zoned as f64), 1))
+    };
+    let rows = |z: &ZoneSpread, all: bool| {
+        [
+            ha(&z.low_m2, all),
+            ha(&z.medium_m2, all),
+            ha(&z.high_m2, all),
+            share(z.cells_differing, z.cells_zoned) + " %",
+            share(z.well_sampled_differing, z.well_sampled_zoned) + " %",
+        ]
+    };
+    let labels: [&str; 5] = [
+        "low (yellow) zone, ha",
+        "medium (blue) zone, ha",
+        "high (red) zone, ha",
+        "zoned cells whose level differs",
+        &format!("… of those at least {WELL_SAMPLED_ROCKS} rocks of every run reach"),
+    ];
+    let mut md = String::from(
+        "\n## Hazard zones\n\nEach run's `hazard_zones.tif` (its `[hazard_zones]` settings) compared cell by cell: \
+         each zone's area over the runs, and the zoned cells (level 1 or more in some run) whose level is not the \
+         same in every run. `hazard_zones_max` is the highest level any run gives a cell (the zoning that holds \
+         under every run), `hazard_zones_min` the lowest.\n\n",
+    );
+    let ours = rows(&s.zones, true);
+    match &s.floor {
+        Some(f) => {
+            md += "| | runs: lowest / median / highest | seeds alone: lowest – highest |\n|---|---|---|\n";
+            for ((label, a), b) in labels.iter().zip(&ours).zip(rows(&f.zones, false)) {
+                md += &format!("| {label} | {a} | {b} |\n");
+            }
+        }
+        None => {
+            md += "| | runs: lowest / median / highest |\n|---|---|\n";
+            for (label, a) in labels.iter().zip(&ours) {
+                md += &format!("| {label} | {a} |\n");
+            }
+        }
+    }
+    md
+}
+
 /// `envelope.md`; `members` says what was run.
 fn markdown(s: &EnvelopeSummary, members: &str) -> String {
     let n = s.models.len();
@@ -556,6 +666,7 @@ fn markdown(s: &EnvelopeSummary, members: &str) -> String {
         }
         md += "\n";
     }
+    md += &zones_markdown(s);
     if !s.collectors.is_empty() {
         md += "\n## Collector lines\n\nEach line's figures over the runs, lowest / median / highest (the \
                scenarios' `[[collectors]]` of the same name in every run).";
@@ -589,7 +700,10 @@ fn markdown(s: &EnvelopeSummary, members: &str) -> String {
             md += "\n";
         }
     }
-    md += &format!("\n## Maps\n\n![runs reaching]({REACHING}.png)\n");
+    md += &format!(
+        "\n## Maps\n\n![runs reaching]({REACHING}.png)\n\n### {ZONES} (lowest and highest level)\n\n\
+         ![{ZONES} min]({ZONES}_min.png)\n![{ZONES} max]({ZONES}_max.png)\n"
+    );
     for (stem, description) in RASTERS {
         md += &format!("\n### {stem} ({description})\n\n");
         for stat in STATISTICS {
@@ -607,6 +721,21 @@ mod tests {
         let mut g = Grid::filled(values.len(), 1, 0.0, 1.0, 1.0, 0.0);
         g.values = values.to_vec();
         g
+    }
+
+    #[test]
+    fn zones_compare_cell_by_cell_and_sum_areas() {
+        let nan = f32::NAN;
+        // Cells: outside, never zoned, the same level, levels differing (twice, one well sampled).
+        let a = grid(&[nan, 0.0, 2.0, 1.0, 3.0, 0.0]);
+        let b = grid(&[nan, 0.0, 2.0, 2.0, 3.0, 1.0]);
+        let z = zone_spread(&[a, b], &[true, true, true, true, false, false]);
+        assert_eq!((z.cells_zoned, z.cells_differing), (4, 2));
+        assert_eq!((z.well_sampled_zoned, z.well_sampled_differing), (2, 1));
+        // Cells of 1 m²: a has one low, one medium, one high; b one low, two medium, one high.
+        assert_eq!((z.low_m2.min, z.low_m2.max), (Some(1.0), Some(1.0)));
+        assert_eq!((z.medium_m2.min, z.medium_m2.max), (Some(1.0), Some(2.0)));
+        assert_eq!((z.high_m2.min, z.high_m2.max), (Some(1.0), Some(1.0)));
     }
 
     #[test]
