@@ -137,7 +137,7 @@ pub fn zone_spread(levels: &[Grid], sampled: &[bool]) -> ZoneSpread {
         Spread3::of(levels.iter().map(|g| Some(g.values.iter().filter(|&&v| v == level).count() as f64 * cell_m2)))
     };
     let mut z = ZoneSpread { low_m2: area(1.0), medium_m2: area(2.0), high_m2: area(3.0), ..Default::default() };
-    for k in 0..sampled.len() {
+    for (k, &well) in sampled.iter().enumerate() {
         let v: Vec<f32> = levels.iter().map(|g| g.values[k]).collect();
         if v.iter().any(|x| x.is_nan()) || v.iter().all(|&x| x < 1.0) {
             continue;
@@ -145,7 +145,7 @@ pub fn zone_spread(levels: &[Grid], sampled: &[bool]) -> ZoneSpread {
         let differs = v.iter().any(|&x| x != v[0]);
         z.cells_zoned += 1;
         z.cells_differing += differs as usize;
-        if sampled[k] {
+        if well {
             z.well_sampled_zoned += 1;
             z.well_sampled_differing += differs as usize;
         }
