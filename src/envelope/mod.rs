@@ -560,15 +560,16 @@ fn zones_markdown(s: &EnvelopeSummary) -> String {
         })
     };
     let share = |differing: usize, zoned: usize| {
-        format!("{differing} of {zoned} ({})", fmt_opt((zoned > 0).then(|| 100.0 * differing as f64 / zoned as f64), 1))
+        let pct = fmt_opt((zoned > 0).then(|| 100.0 * differing as f64 / zoned as f64), 1);
+        format!("{differing} of {zoned} ({pct} %)")
     };
     let rows = |z: &ZoneSpread, all: bool| {
         [
             ha(&z.low_m2, all),
             ha(&z.medium_m2, all),
             ha(&z.high_m2, all),
-            share(z.cells_differing, z.cells_zoned) + " %",
-            share(z.well_sampled_differing, z.well_sampled_zoned) + " %",
+            share(z.cells_differing, z.cells_zoned),
+            share(z.well_sampled_differing, z.well_sampled_zoned),
         ]
     };
     let labels: [&str; 5] = [
