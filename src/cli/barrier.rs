@@ -143,8 +143,9 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
     }
     if let (Some(best), Some(floor)) = (ranked.first(), &floor) {
         let same = &floor.assessments[best.candidate];
-        let design = |x: &talus::barrier::Assessment| {
-            format!("{:.0} m, {:.1} m, {}", x.length_m, x.fence_height_m, x.class_label)
+        let design = |x: &talus::barrier::Assessment| match x.status {
+            Status::Sized => format!("{:.0} m, {:.1} m, {}", x.length_m, x.fence_height_m, x.class_label),
+            Status::TooFewRocks => "nothing (too few rocks reach its zone)".to_string(),
         };
         println!(
             "seeds alone ({}): {} needs {}; their own #1: {}",
