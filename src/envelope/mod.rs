@@ -394,10 +394,16 @@ fn envelope_of(
             .collect::<Result<Vec<Grid>>>()
     };
     let rocks: Vec<usize> = models.iter().map(|m| m.rocks).collect();
-    let sampled = well_sampled(&read("reach_probability")?, &rocks);
+    // The reach rasters decide which cells are well sampled; read once, combined in turn below.
+    let reach_grids = read("reach_probability")?;
+    let sampled = well_sampled(&reach_grids, &rocks);
+    let mut reach = Some(reach_grids);
     let mut rasters = Vec::new();
     for (stem, _) in RASTERS {
-        let grids = read(stem)?;
+        let grids = match reach.take_if(|_| stem == "reach_probability") {
+            Some(g) => g,
+            None => read(stem)?,
+        };
         let combined = combine(&grids, &names)?;
         let style = maps::raster_style(stem);
         // One colour bar for the three maps of a raster, so they compare by eye.
