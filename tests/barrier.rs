@@ -342,7 +342,7 @@ fn barrier_against_several_models_holds_in_each_and_takes_the_largest_design() {
     let o = RunOverrides { threads: Some(2), ..Default::default() };
     let run = |models: &[(&str, &Scenario)], out: &str| {
         let models: Vec<(String, Scenario)> = models.iter().map(|(n, s)| (n.to_string(), (*s).clone())).collect();
-        propose_models(&models, &o, &dir.path().join(out), &|_| {}, &|_, _| {}).unwrap()
+        propose_models(&models, &o, &dir.path().join(out), false, &|_| {}, &|_, _| {}).unwrap()
     };
     let alone_a = run(&[("a", &a)], "a");
     let alone_b = run(&[("b", &b)], "b");
@@ -432,7 +432,8 @@ fn barrier_models_on_the_command_line() {
     assert_eq!(m1_summary["rocks"], 60);
     // --floor: the first model with its seed and the next, sized alike in OUT/floor/.
     let seed = m1_summary["seed"].as_u64().unwrap();
-    assert!(stdout.contains("seeds alone"), "{stdout}");
+    assert!(stdout.contains("Seeds alone (m1, 2 seeds)"), "{stdout}");
+    assert!(std::fs::read_to_string(out.join("proposals.md")).unwrap().contains("Seeds alone"));
     let floor_run = |s: u64, kind: &str| {
         let path = out.join(format!("floor/models/seed_{s}/{kind}/summary.json"));
         serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(&path).unwrap()).unwrap()

@@ -62,6 +62,9 @@ pub struct BarrierStudy {
     pub barrier: Option<BarrierSpec>,
     /// Files written into the study folder (not counting the run folders).
     pub outputs: Vec<String>,
+    /// With several models and `floor`: the same study against the first model run with as many seeds
+    /// (`DIR/floor/`), what Monte Carlo noise alone asks for.
+    pub floor: Option<Box<BarrierStudy>>,
 }
 
 impl BarrierStudy {
@@ -95,11 +98,10 @@ pub fn protected_zone(spec: &DesignSpec, terrain: &Terrain) -> Option<ProtectedZ
     }
 }
 
-/// The model `model` once per seed `seed`, `seed + 1`, ... (`n` of them, named `seed_S`): sized with
-/// [`propose_models`] (and overrides without a seed), the design that Monte Carlo noise alone asks for against `n`
-/// models, beside which a design against `n` calibrated models is read (`talus barrier --floor`; ours, as
-/// `talus envelope --floor`).
-pub fn seed_floor(model: &Scenario, seed: u64, n: usize) -> Vec<(String, Scenario)> {
+/// The model `model` once per seed `seed`, `seed + 1`, ... (`n` of them, named `seed_S`): sized together, the
+/// design that Monte Carlo noise alone asks for against `n` models, beside which a design against `n` calibrated
+/// models is read (`talus barrier --floor`; ours, as `talus envelope --floor`).
+fn seed_floor(model: &Scenario, seed: u64, n: usize) -> Vec<(String, Scenario)> {
     (0..n as u64)
         .map(|i| seed.wrapping_add(i))
         .map(|s| {
@@ -119,17 +121,19 @@ pub fn propose(
     stage: &dyn Fn(&str),
     progress: &dyn Fn(usize, usize),
 ) -> Result<BarrierStudy> {
-    propose_models(&[("scenario".to_string(), sc.clone())], overrides, out_dir, stage, progress)
+    propose_models(&[("scenario".to_string(), sc.clone())], overrides, out_dir, false, stage, progress)
 }
 
 /// Runs the whole study into `out_dir` with several models of one site: named scenarios that differ only in their
 /// materials and engine settings (see [`crate::envelope::on_site`]); the first one's terrain, sources and
 /// `[barrier_design]` are used. Each model runs the same rocks without and with the proposal; the sizing takes
-/// them all ([`design::assess`]).
+/// them all ([`design::assess`]). With `floor` (and more than one model), the same study of the first model with
+/// as many seeds (the first the models' seed) goes to `out_dir/floor/`.
 pub fn propose_models(
     models: &[(String, Scenario)],
     overrides: &RunOverrides,
     out_dir: &Path,
+    floor: bool,
     stage: &dyn Fn(&str),
     progress: &dyn Fn(usize, usize),
 ) -> Result<BarrierStudy> {
@@ -206,7 +210,16 @@ pub fn propose_models(
         }
         barrier = Some(b);
     }
-    let mut study = BarrierStudy { candidates, assessments, models: runs, barrier, outputs: Vec::new() };
+    let floor = if floor && n > 1 {
+        let seed = overrides.seed.unwrap_or(sc.file.simulation.seed);
+        stage(&format!("the floor: model {} with seeds {seed} to {}", models[0].0, seed.wrapping_add(n as u64 - 1)));
+        let o = RunOverrides { seed: None, ..overrides.clone() };
+        let seeds = seed_floor(sc, seed, n);
+        Some(Box::new(propose_models(&seeds, &o, &out_dir.join("floor"), false, stage, progress)?))
+    } else {
+        None
+    };
+    let mut study = BarrierStudy { candidates, assessments, models: runs, barrier, outputs: Vec::new(), floor };
     stage("writing tables, maps and index.html");
     study.outputs = report::write_study(out_dir, sc, &terrain, &study)?;
     Ok(study)

@@ -432,6 +432,40 @@ fn model_rows(study: &BarrierStudy, a: &Assessment) -> Vec<Vec<String>> {
         .collect()
 }
 
+/// What seeds alone ask for on the models' proposal #1, in a sentence (`None` without a floor or a proposal).
+pub fn floor_sentence(study: &BarrierStudy) -> Option<String> {
+    let floor = study.floor.as_ref()?;
+    let best = study.ranked().into_iter().next()?;
+    let design = |x: &Assessment| match x.status {
+        Status::Sized => {
+            format!("{} m long, {} m high, {}", fmt_num(x.length_m), fmt_num(x.fence_height_m), x.class_label)
+        }
+        Status::TooFewRocks => "nothing (too few rocks reach its zone)".to_string(),
+    };
+    let heights = |a: &Assessment| {
+        let h: Vec<f64> = a.per_model.iter().filter(|d| d.sizes).map(|d| d.design_height_m).collect();
+        let lo = h.iter().copied().fold(f64::INFINITY, f64::min);
+        let hi = h.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if h.is_empty() {
+            "–".to_string()
+        } else {
+            format!("{}–{} m", num(lo), num(hi))
+        }
+    };
+    let same = &floor.assessments[best.candidate];
+    Some(format!(
+        "Seeds alone ({}, {} seeds): on {} they ask {} (design heights {} over the seeds, {} over the models); \
+         their own #1: {}",
+        study.models[0].name,
+        floor.models.len(),
+        best.name,
+        design(same),
+        heights(same),
+        heights(best),
+        floor.ranked().first().map_or("none".to_string(), |x| format!("{}, {}", x.name, design(x)))
+    ))
+}
+
 /// What the models are, in a sentence.
 fn models_sentence(study: &BarrierStudy) -> String {
     format!(
@@ -473,6 +507,9 @@ fn markdown(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment]) -> String
         ));
         for row in model_rows(study, a) {
             s.push_str(&format!("| {} |\n", row.join(" | ")));
+        }
+        if let Some(text) = floor_sentence(study) {
+            s.push_str(&format!("\n{text} (`floor/proposals.md`).\n"));
         }
     }
     if let (Some(b), false) = (&study.barrier, study.models[0].residual.is_none()) {
@@ -534,6 +571,9 @@ fn index_html(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment], files: 
         let rows: Vec<Vec<String>> =
             model_rows(study, a).into_iter().map(|r| r.iter().map(|c| escape(c)).collect()).collect();
         page.raw(&table(&MODEL_HEAD, &rows, &[0], &[0]));
+        if let Some(text) = floor_sentence(study) {
+            page.raw(&format!("<p>{} (<a href=\"floor/index.html\">floor</a>).</p>", escape(&text)));
+        }
     }
     if let (Some(b), Some(_)) = (&study.barrier, &first.residual) {
         page.h2("With the best barrier in place");

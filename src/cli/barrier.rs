@@ -4,9 +4,9 @@ use super::progress;
 use anyhow::Context;
 use clap::Args;
 use std::path::{Path, PathBuf};
-use talus::barrier::{propose_models, seed_floor, Status};
+use talus::barrier::report::floor_sentence;
+use talus::barrier::{propose_models, Status};
 use talus::envelope::{model_names, on_site};
-use talus::run::RunOverrides;
 use talus::scenario::ScenarioFile;
 
 /// Propose rockfall barrier positions: candidate lines (contours, bench crests and toes, offsets of a toe or asset
@@ -92,24 +92,8 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
         }
         pb.set_position(done as u64);
     };
-    let study = propose_models(&models, &overrides, &a.out, &stage, &progress)
+    let study = propose_models(&models, &overrides, &a.out, a.floor, &stage, &progress)
         .with_context(|| format!("talus barrier {}", a.scenario.display()))?;
-    let floor = if a.floor {
-        let seed = a.control.seed.unwrap_or(sc.file.simulation.seed);
-        let seeds = seed_floor(&models[0].1, seed, models.len());
-        stage(&format!(
-            "the floor: model {} with seeds {seed} to {}",
-            models[0].0,
-            seeds.last().map_or(seed, |s| s.1.file.simulation.seed)
-        ));
-        let o = RunOverrides { seed: None, ..overrides.clone() };
-        Some(
-            propose_models(&seeds, &o, &a.out.join("floor"), &stage, &progress)
-                .with_context(|| format!("talus barrier {} --floor", a.scenario.display()))?,
-        )
-    } else {
-        None
-    };
     pb.finish_and_clear();
     let ranked = study.ranked();
     let sized = study.assessments.iter().filter(|x| x.status == Status::Sized).count();
@@ -141,19 +125,8 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
             100.0 * best.share
         );
     }
-    if let (Some(best), Some(floor)) = (ranked.first(), &floor) {
-        let same = &floor.assessments[best.candidate];
-        let design = |x: &talus::barrier::Assessment| match x.status {
-            Status::Sized => format!("{:.0} m, {:.1} m, {}", x.length_m, x.fence_height_m, x.class_label),
-            Status::TooFewRocks => "nothing (too few rocks reach its zone)".to_string(),
-        };
-        println!(
-            "seeds alone ({}): {} needs {}; their own #1: {}",
-            a.out.join("floor").display(),
-            best.name,
-            design(same),
-            floor.ranked().first().map_or("none".to_string(), |x| format!("{} ({})", x.name, design(x)))
-        );
+    if let Some(text) = floor_sentence(&study) {
+        println!("{text} ({})", a.out.join("floor").display());
     }
     for m in &study.models {
         let (Some(r), Some(b)) = (&m.residual, &study.barrier) else { continue };
