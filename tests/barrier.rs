@@ -432,7 +432,7 @@ fn barrier_models_on_the_command_line() {
     assert_eq!(m1_summary["rocks"], 60);
     // --floor: the first model with its seed and the next, sized alike in OUT/floor/.
     let seed = m1_summary["seed"].as_u64().unwrap();
-    assert!(stdout.contains("Seeds alone (m1, 2 seeds)"), "{stdout}");
+    assert!(stdout.contains("Seeds alone (model m1 with 2 seeds)"), "{stdout}");
     assert!(std::fs::read_to_string(out.join("proposals.md")).unwrap().contains("Seeds alone"));
     let floor_run = |s: u64, kind: &str| {
         let path = out.join(format!("floor/models/seed_{s}/{kind}/summary.json"));

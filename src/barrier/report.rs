@@ -454,7 +454,7 @@ pub fn floor_sentence(study: &BarrierStudy) -> Option<String> {
     };
     let same = &floor.assessments[best.candidate];
     Some(format!(
-        "Seeds alone ({}, {} seeds): on {} they ask {} (design heights {} over the seeds, {} over the models); \
+        "Seeds alone (model {} with {} seeds): on {} they ask {} (design heights {} over the seeds, {} over the models); \
          their own #1: {}",
         study.models[0].name,
         floor.models.len(),
