@@ -56,6 +56,12 @@ impl Default for ZoneSettings {
 pub const LEVELS: [(u8, &str, [u8; 3]); 3] =
     [(1, "low (yellow)", [250, 215, 0]), (2, "medium (blue)", [40, 110, 225]), (3, "high (red)", [225, 30, 30])];
 
+/// The area of each hazard level (low, medium, high) of a level grid, m².
+pub fn areas_m2(levels: &Grid) -> [f64; 3] {
+    let cell_m2 = levels.cell_x_m * levels.cell_y_m;
+    [1.0, 2.0, 3.0].map(|l| levels.values.iter().filter(|&&v| v == l).count() as f64 * cell_m2)
+}
+
 /// The hazard level (1 low, 2 medium, 3 high) of intensity class `i` and probability class `p` (1..=3 each).
 pub fn level(i: u8, p: u8) -> u8 {
     match (i, p) {
@@ -95,6 +101,16 @@ impl ZoneSettings {
     /// Probability class (1..=3) of a reach probability.
     pub fn probability(&self, p: f64) -> u8 {
         1 + (p > self.reach[0]) as u8 + (p > self.reach[1]) as u8
+    }
+
+    /// The zone grids (levels, matrix cells) of a run from its rasters, in the order of [`crate::run::RASTERS`]
+    /// (reach probability second, then the energies' P95 and max).
+    pub fn run_grids(&self, rasters: &[Grid]) -> (Grid, Grid) {
+        let energy = match self.energy {
+            IntensityEnergy::P95 => &rasters[2],
+            IntensityEnergy::Max => &rasters[3],
+        };
+        self.grids(&rasters[1], energy)
     }
 
     /// The zone grids (levels, matrix cells) from the reach probability and the energy rasters (kJ) of a run.

@@ -325,6 +325,22 @@ fn barrier_study_ranks_sizes_reruns_and_does_not_depend_on_threads() {
     assert_eq!(with.summary.barriers.len(), 1);
     assert_eq!(with.summary.barriers[0].caught, r.caught);
     assert_eq!(with.summary.rocks, m.without.summary.rocks);
+    // The hazard zones' areas without and with the barrier are those of the two runs' hazard_zones.tif.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("barrier_study.json")).unwrap()).unwrap();
+    for kind in ["without", "with"] {
+        let levels = talus::io::geotiff::read_grid(&out.join(format!("{kind}_barrier/hazard_zones.tif"))).unwrap();
+        let areas = talus::zones::areas_m2(&levels);
+        let got: Vec<f64> = json["models"][0]["zone_areas_m2"][kind]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        assert_eq!(got, areas.to_vec(), "{kind}");
+    }
+    let md = std::fs::read_to_string(out.join("proposals.md")).unwrap();
+    assert!(md.contains("| hazard zone high (red) |"), "{md}");
 }
 
 /// `talus barrier --models`: two models of one site (a bouncier bench floor in the second). The proposal holds the

@@ -13,6 +13,7 @@ use crate::render::colormap::CATEGORICAL;
 use crate::render::{Colormap, OverlayLine, Overlays, ValueScale};
 use crate::report::html::{escape, figure, num, table, Page};
 use crate::report::maps::{self, fmt_num, Style, BARRIER_COLOUR};
+use crate::run::RunOutput;
 use crate::scenario::Scenario;
 use crate::terrain::frame::{ground_xyz, map_xy};
 use crate::terrain::Terrain;
@@ -283,6 +284,11 @@ pub fn write_study(dir: &Path, sc: &Scenario, terrain: &Terrain, study: &Barrier
             "name": m.name,
             "title": m.without.summary.title,
             "residual": m.residual,
+            "zone_areas_m2": {
+                "levels": ["low", "medium", "high"],
+                "without": zone_areas(sc, &m.without),
+                "with": m.with.as_ref().map(|w| zone_areas(sc, w)),
+            },
         })).collect::<Vec<_>>(),
     });
     let text = serde_json::to_string_pretty(&json)
@@ -365,17 +371,31 @@ fn rerun_sentence(study: &BarrierStudy, b: &crate::scenario::BarrierSpec) -> Str
     )
 }
 
-fn residual_rows(study: &BarrierStudy) -> Vec<(String, String, String)> {
-    let Some(r) = &study.models[0].residual else { return Vec::new() };
+/// Each hazard zone's area (low, medium, high) of a run, m² (the scenario's `[hazard_zones]`).
+fn zone_areas(sc: &Scenario, run: &RunOutput) -> [f64; 3] {
+    crate::zones::areas_m2(&sc.file.hazard_zones.run_grids(&run.grids).0)
+}
+
+fn residual_rows(sc: &Scenario, study: &BarrierStudy) -> Vec<(String, String, String)> {
+    let m = &study.models[0];
+    let (Some(r), Some(with)) = (&m.residual, &m.with) else { return Vec::new() };
     let pct = |k: u64| format!("{k} ({:.1} %)", 100.0 * k as f64 / r.rocks.max(1) as f64);
-    vec![
+    let (a, b) = (zone_areas(sc, &m.without), zone_areas(sc, with));
+    let ha = |x: f64| format!("{:.2} ha", x / 1e4);
+    let zones = crate::zones::LEVELS.iter().rev().map(|(l, name, _)| {
+        let k = *l as usize - 1;
+        (format!("hazard zone {name}"), ha(a[k]), ha(b[k]))
+    });
+    let mut rows: Vec<(String, String, String)> = vec![
         ("rocks reaching the protected zone".into(), pct(r.reaching_without), pct(r.reaching_with)),
         ("caught by the barrier".into(), "–".into(), pct(r.caught)),
         ("… of those reaching: broke through".into(), "–".into(), pct(r.through)),
         ("… passed over the top".into(), "–".into(), pct(r.over)),
         ("… passed round the ends".into(), "–".into(), pct(r.around)),
         ("… reached it elsewhere".into(), "–".into(), pct(r.elsewhere)),
-    ]
+    ];
+    rows.extend(zones);
+    rows
 }
 
 const MODEL_HEAD: [&str; 7] = [
@@ -517,7 +537,7 @@ fn markdown(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment]) -> String
             "\n## With the best barrier in place\n\n{}. The same rocks run again.\n\n| | without | with |\n|---|---|---|\n",
             rerun_sentence(study, b)
         ));
-        for (k, a, w) in residual_rows(study) {
+        for (k, a, w) in residual_rows(sc, study) {
             s.push_str(&format!("| {k} | {a} | {w} |\n"));
         }
     }
@@ -579,7 +599,7 @@ fn index_html(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment], files: 
         page.h2("With the best barrier in place");
         page.raw(&format!("<p class=\"big\">{}. The same rocks run again.</p>", escape(&rerun_sentence(study, b))));
         let rows: Vec<Vec<String>> =
-            residual_rows(study).into_iter().map(|(k, a, w)| vec![escape(&k), escape(&a), escape(&w)]).collect();
+            residual_rows(sc, study).into_iter().map(|(k, a, w)| vec![escape(&k), escape(&a), escape(&w)]).collect();
         page.raw(&table(&["", "without", "with"], &rows, &[0], &[0]));
         page.raw(&format!(
             "<div class=\"pair\">{}{}</div><div class=\"pair\">{}</div>",

@@ -132,11 +132,9 @@ pub struct ZoneSpread {
 
 /// The zone levels of the runs compared cell by cell (`sampled`: the well-sampled cells).
 pub fn zone_spread(levels: &[Grid], sampled: &[bool]) -> ZoneSpread {
-    let cell_m2 = levels.first().map_or(0.0, |g| g.cell_x_m * g.cell_y_m);
-    let area = |level: f32| {
-        Spread3::of(levels.iter().map(|g| Some(g.values.iter().filter(|&&v| v == level).count() as f64 * cell_m2)))
-    };
-    let mut z = ZoneSpread { low_m2: area(1.0), medium_m2: area(2.0), high_m2: area(3.0), ..Default::default() };
+    let areas: Vec<[f64; 3]> = levels.iter().map(crate::zones::areas_m2).collect();
+    let area = |level: usize| Spread3::of(areas.iter().map(|a| Some(a[level])));
+    let mut z = ZoneSpread { low_m2: area(0), medium_m2: area(1), high_m2: area(2), ..Default::default() };
     for (k, &well) in sampled.iter().enumerate() {
         let v: Vec<f32> = levels.iter().map(|g| g.values[k]).collect();
         if v.iter().any(|x| x.is_nan()) || v.iter().all(|&x| x < 1.0) {

@@ -88,12 +88,7 @@ pub fn write_run_products(p: &RunProducts) -> Result<Vec<String>> {
         crate::collector::write::write_collectors(dir, &p.collectors.collectors, p.collector_stats, p.terrain, &crs)?;
         out.extend(["collectors.csv".to_string(), "collectors.geojson".to_string()]);
     }
-    let zones = &p.scenario.file.hazard_zones;
-    let energy = match zones.energy {
-        IntensityEnergy::P95 => &p.grids[2],
-        IntensityEnergy::Max => &p.grids[3],
-    };
-    let (levels, matrix) = zones.grids(&p.grids[1], energy);
+    let (levels, matrix) = p.scenario.file.hazard_zones.run_grids(p.grids);
     for ((stem, _), g) in ZONE_RASTERS.iter().zip([&levels, &matrix]) {
         crate::io::geotiff::write_grid(&dir.join(format!("{stem}.tif")), g)?;
         out.push(format!("{stem}.tif"));
