@@ -331,12 +331,8 @@ fn barrier_study_ranks_sizes_reruns_and_does_not_depend_on_threads() {
     for kind in ["without", "with"] {
         let levels = talus::io::geotiff::read_grid(&out.join(format!("{kind}_barrier/hazard_zones.tif"))).unwrap();
         let areas = talus::zones::areas_m2(&levels);
-        let got: Vec<f64> = json["models"][0]["zone_areas_m2"][kind]
-            .as_array()
-            .unwrap()
-            .iter()
-            .map(|v| v.as_f64().unwrap())
-            .collect();
+        let got: Vec<f64> =
+            json["models"][0]["zone_areas_m2"][kind].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
         assert_eq!(got, areas.to_vec(), "{kind}");
     }
     let md = std::fs::read_to_string(out.join("proposals.md")).unwrap();
