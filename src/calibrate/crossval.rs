@@ -385,6 +385,14 @@ fn parameters_markdown(s: &mut String, model: &str, spread: &[ParameterSpread], 
          the spread that seeds alone give.",
         fold_models_glob(model, per_fold)
     );
+    if model != "2dlm" {
+        let _ = writeln!(
+            s,
+            "A barrier that holds under every one of them: `talus barrier SITE.toml --models {} --floor --out DIR` \
+             (SITE.toml: the terrain, sources and `[barrier_design]`, with the models' material names).",
+            fold_models_glob(model, per_fold)
+        );
+    }
 }
 
 /// The scenario files of a cross-validation's fold models, relative to its output folder (one cross-validation's
@@ -497,6 +505,7 @@ mod tests {
             "{md}"
         );
         assert!(md.contains("`talus envelope fold_*/calibrated.toml --floor --out DIR`"), "{md}");
+        assert!(md.contains("`talus barrier SITE.toml --models fold_*/calibrated.toml --floor --out DIR`"), "{md}");
         let mut md = String::new();
         parameters_markdown(&mut md, "2dlm", &spread, "each of the 3 folds", false);
         assert!(md.contains("`talus envelope repeat_*/fold_*/calibrated_profile.toml --floor --out DIR`"), "{md}");

@@ -212,6 +212,12 @@ fn print_parameter_spread(spread: &[calibrate::crossval::ParameterSpread]) {
 fn print_fold_maps(model: &str, out: &std::path::Path, per_fold: bool) {
     let models = out.join(calibrate::crossval::fold_models_glob(model, per_fold));
     println!("the fold models side by side: talus envelope {} --floor --out DIR", models.display());
+    if model != "2dlm" {
+        println!(
+            "a barrier that holds under each: talus barrier SITE.toml --models {} --floor --out DIR",
+            models.display()
+        );
+    }
 }
 
 /// One line of `set`'s run-out errors, baseline `b` against final `f`.
