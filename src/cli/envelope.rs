@@ -119,11 +119,9 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
         _ => "-".to_string(),
     };
     let zones = |z: &talus::envelope::ZoneSpread| {
-        let ha = |x: &talus::envelope::Spread3| {
-            range(
-                &talus::envelope::Spread3 { min: x.min.map(|v| v / 1e4), median: None, max: x.max.map(|v| v / 1e4) },
-                2,
-            )
+        let ha = |x: &talus::envelope::Spread3| match (x.min, x.max) {
+            (Some(lo), Some(hi)) => format!("{:.2}-{:.2}", lo / 1e4, hi / 1e4),
+            _ => "-".to_string(),
         };
         let pct =
             |d: usize, n: usize| if n == 0 { "-".to_string() } else { format!("{:.1} %", 100.0 * d as f64 / n as f64) };
