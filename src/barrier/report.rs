@@ -590,7 +590,12 @@ fn index_html(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment], files: 
         page.note(&models_sentence(study));
         let rows: Vec<Vec<String>> =
             model_rows(study, a).into_iter().map(|r| r.iter().map(|c| escape(c)).collect()).collect();
-        page.raw(&table(&MODEL_HEAD, &rows, &[0], &[0]));
+        // The models that set the height and the class stand out.
+        let governing: Vec<usize> = (a.per_model.iter().enumerate())
+            .filter(|(_, d)| d.model == a.height_from || d.model == a.energy_from)
+            .map(|(i, _)| i)
+            .collect();
+        page.raw(&table(&MODEL_HEAD, &rows, &[0], &governing));
         if let Some(text) = floor_sentence(study) {
             page.raw(&format!("<p>{} (<a href=\"floor/index.html\">floor</a>).</p>", escape(&text)));
         }
