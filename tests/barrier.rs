@@ -3,7 +3,9 @@
 use nalgebra::{UnitQuaternion, Vector3};
 use std::path::{Path, PathBuf};
 use talus::barrier::design::ModelDesign;
-use talus::barrier::{candidates::candidates, propose, propose_models, Assessment, CandidateKind, DesignSpec, Status};
+use talus::barrier::{
+    candidates::candidates, propose, propose_models, AcrossModels, Assessment, CandidateKind, DesignSpec, Status,
+};
 use talus::collector::{Collector, CollectorSet, CollectorTrack};
 use talus::random::{stream, uniform, TruncNormal};
 use talus::rock::{RockBody, RockSize, ShapeKind};
@@ -391,6 +393,28 @@ fn barrier_against_several_models_holds_in_each_and_takes_the_largest_design() {
         assert!(x.length_m >= alone_a.assessments[k].length_m.min(alone_b.assessments[k].length_m) - 1e-9);
         assert!(["a", "b"].contains(&x.height_from.as_str()) && ["a", "b"].contains(&x.energy_from.as_str()));
     }
+    // Pooled: one ensemble of both models' rocks. Its share is of the pooled counts, and each pooled P95 lies
+    // between the models' own (a mixture's quantile lies between its components'), to the collectors' bin width
+    // (50 bins a decade, 4.7 %).
+    let (mut ap, mut bp) = (a.clone(), b.clone());
+    ap.file.barrier_design.across_models = AcrossModels::Pooled;
+    bp.file.barrier_design.across_models = AcrossModels::Pooled;
+    let pooled = run(&[("a", &ap), ("b", &bp)], "pooled");
+    let mut checked = 0;
+    for x in pooled.assessments.iter().filter(|x| x.status == Status::Sized) {
+        let sum = |f: fn(&ModelDesign) -> u64| x.per_model.iter().map(f).sum::<u64>();
+        assert_eq!((x.rocks_reaching, x.intercepted), (sum(|d| d.rocks_reaching), sum(|d| d.intercepted)));
+        assert_eq!((x.height_from.as_str(), x.energy_from.as_str()), ("pooled", "pooled"));
+        let e: Vec<f64> = x.per_model.iter().map(|d| d.energy_p95_kj).filter(|e| e.is_finite()).collect();
+        if e.len() == 2 {
+            let (lo, hi) = (e[0].min(e[1]), e[0].max(e[1]));
+            let e = x.energy_p95_kj;
+            assert!(e >= lo / 1.047 && e <= hi * 1.047, "{}: {lo} {e} {hi}", x.name);
+            checked += 1;
+        }
+    }
+    assert!(checked > 3, "{checked} candidates crossed in both models");
+
     let best = both.ranked()[0];
     assert!(best.meets_target, "{}: {}", best.name, best.note);
     // Re-run under each model with the one barrier; each with-run has it and keeps that model's rocks.

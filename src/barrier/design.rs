@@ -33,8 +33,8 @@
 
 use super::candidates::{Candidate, CandidateKind};
 use super::classes::{class_for, class_label, cost};
-use super::settings::{ClassEnergy, DesignSpec};
-use crate::collector::{Collector, CollectorStats, Quantity, RockCrossings};
+use super::settings::{AcrossModels, ClassEnergy, DesignSpec};
+use crate::collector::{Collector, CollectorStats, Quantity, QuantityDists, RockCrossings};
 use serde::Serialize;
 
 /// Per-stretch counts of the rocks that reach each candidate's protected zone, gathered rock by rock.
@@ -326,22 +326,25 @@ pub fn assess(candidates: &[Candidate], runs: &[ModelRun], spec: &DesignSpec) ->
                 energy_from: String::new(),
                 per_model: Vec::new(),
             };
-            if !sizes.iter().any(|&s| s) {
+            let pooled = spec.across_models == AcrossModels::Pooled && runs.len() > 1;
+            let (reaching_all, total_all) = (reaching.iter().sum::<u64>(), totals.iter().sum::<u64>());
+            let sized = if pooled { reaching_all >= min_rocks && total_all > 0 } else { sizes.iter().any(|&s| s) };
+            if !sized {
                 a.note = format!("{} rocks reach its protected zone (fewer than {min_rocks})", a.rocks_reaching);
                 return a;
             }
-            let need = |m: usize| {
-                let n = ((spec.target_share * reaching[m] as f64 - 1e-9).ceil() as u64).max(1);
-                if sizes[m] {
-                    n
-                } else {
-                    0
-                }
-            };
-            let needs: Vec<u64> = (0..runs.len()).map(|m| need(m).min(totals[m])).collect();
+            let need = |r: u64| ((spec.target_share * r as f64 - 1e-9).ceil() as u64).max(1);
             let lengths: Vec<f64> =
                 (0..col.stretch_count()).map(|s| col.stretch_span_m(s)).map(|(a, b)| b - a).collect();
-            let counts: Vec<&[u32]> = runs.iter().map(|r| r.tally.targeted[k].as_slice()).collect();
+            // Pooled: one ensemble of every model's rocks; worst: every model's own counts and need.
+            let summed: Vec<u32>;
+            let (counts, needs): (Vec<&[u32]>, Vec<u64>) = if pooled {
+                summed = (0..col.stretch_count()).map(|s| runs.iter().map(|r| r.tally.targeted[k][s]).sum()).collect();
+                (vec![summed.as_slice()], vec![need(reaching_all).min(total_all)])
+            } else {
+                let needs = (0..runs.len()).map(|m| if sizes[m] { need(reaching[m]).min(totals[m]) } else { 0 });
+                (runs.iter().map(|r| r.tally.targeted[k].as_slice()).collect(), needs.collect())
+            };
             let (start, count) =
                 shortest_run(&counts, &lengths, &needs, col.is_closed()).unwrap_or((0, col.stretch_count()));
             let stretches: Vec<usize> = (start..start + count).map(|s| s % col.stretch_count()).collect();
@@ -359,43 +362,28 @@ pub fn assess(candidates: &[Candidate], runs: &[ModelRun], spec: &DesignSpec) ->
             a.to_m = to;
             a.length_m = lengths.iter().enumerate().filter(|(s, _)| stretches.contains(s)).map(|(_, l)| l).sum();
             a.status = Status::Sized;
-            a.per_model = runs
-                .iter()
-                .enumerate()
+            let dists: Vec<QuantityDists> =
+                runs.iter().map(|r| r.stats.stretch_range_dists(ci, stretches.iter().copied())).collect();
+            let intercepted: Vec<u64> =
+                runs.iter().map(|r| stretches.iter().map(|&s| r.tally.targeted[k][s] as u64).sum()).collect();
+            let per_model: Vec<ModelDesign> = (runs.iter().enumerate())
                 .map(|(m, run)| {
-                    let intercepted: u64 = stretches.iter().map(|&s| run.tally.targeted[k][s] as u64).sum();
-                    let d = run.stats.stretch_range_dists(ci, stretches.iter().copied());
-                    let h95 = d.quantile(Quantity::Height, 0.95);
-                    let size95 = d.quantile(Quantity::Size, 0.95);
-                    let e = [0.95, 0.99].map(|q| d.quantile(Quantity::Kinetic, q));
-                    let e_max = d.max(Quantity::Kinetic);
-                    ModelDesign {
-                        model: run.name.to_string(),
-                        rocks_reaching: reaching[m],
-                        intercepted,
-                        share: intercepted as f64 / reaching[m].max(1) as f64,
-                        share_of_released: intercepted as f64 / run.tally.rocks.max(1) as f64,
-                        sizes: sizes[m],
-                        rocks_crossing: d.count() as u64,
-                        passing_height_p95_m: h95,
-                        passing_height_max_m: d.max(Quantity::Height),
-                        rock_size_p95_m: size95,
-                        design_height_m: h95 + size95,
-                        energy_p95_kj: e[0],
-                        energy_p99_kj: e[1],
-                        energy_max_kj: e_max,
-                        design_energy_kj: match spec.class_energy {
-                            ClassEnergy::P95 => e[0],
-                            ClassEnergy::P99 => e[1],
-                            ClassEnergy::Max => e_max,
-                        },
-                        speed_p95_mps: d.quantile(Quantity::Speed, 0.95),
-                        crossing_angle_p50_deg: d.quantile(Quantity::Angle, 0.5),
-                    }
+                    let counts = (reaching[m], intercepted[m], run.tally.rocks);
+                    design_of(run.name, &dists[m], counts, sizes[m], spec)
                 })
                 .collect();
-            let sizing: Vec<(usize, &ModelDesign)> =
-                a.per_model.iter().enumerate().filter(|(m, _)| sizes[*m]).collect();
+            if pooled {
+                let mut d = QuantityDists::default();
+                dists.iter().for_each(|x| d.merge(x));
+                let released = runs.iter().map(|r| r.tally.rocks).sum();
+                let all = design_of("pooled", &d, (reaching_all, intercepted.iter().sum(), released), true, spec);
+                a.meets_target = all.intercepted >= need(reaching_all);
+                take(&mut a, &all, &all, &all, &all);
+                finish(&mut a, all.design_energy_kj, spec);
+                a.per_model = per_model;
+                return a;
+            }
+            let sizing: Vec<(usize, &ModelDesign)> = per_model.iter().enumerate().filter(|(m, _)| sizes[*m]).collect();
             let largest = |f: fn(&ModelDesign) -> f64| {
                 sizing.iter().map(|(_, d)| *d).max_by(|x, y| f(x).total_cmp(&f(y))).expect("a model sizes")
             };
@@ -403,49 +391,108 @@ pub fn assess(candidates: &[Candidate], runs: &[ModelRun], spec: &DesignSpec) ->
             let tall = largest(|d| d.design_height_m);
             let strong = largest(|d| d.design_energy_kj);
             let fold = |f: fn(&ModelDesign) -> f64| sizing.iter().map(|(_, d)| f(d)).fold(f64::NAN, f64::max);
-            a.rocks_reaching = worst.rocks_reaching;
-            a.intercepted = worst.intercepted;
-            a.share = worst.share;
-            a.rocks_crossing = worst.rocks_crossing;
-            a.share_of_released = worst.share_of_released;
-            a.meets_target = sizing.iter().all(|(m, d)| d.intercepted >= need(*m));
-            a.passing_height_p95_m = tall.passing_height_p95_m;
-            a.rock_size_p95_m = tall.rock_size_p95_m;
-            a.design_height_m = tall.design_height_m;
-            a.height_from = tall.model.clone();
-            a.passing_height_max_m = fold(|d| d.passing_height_max_m);
-            a.fence_height_m = (a.design_height_m / 0.5).ceil() * 0.5;
-            a.energy_p95_kj = fold(|d| d.energy_p95_kj);
-            a.energy_p99_kj = fold(|d| d.energy_p99_kj);
-            a.energy_max_kj = fold(|d| d.energy_max_kj);
-            a.speed_p95_mps = fold(|d| d.speed_p95_mps);
-            a.crossing_angle_p50_deg = strong.crossing_angle_p50_deg;
-            a.energy_from = strong.model.clone();
-            a.class = class_for(strong.design_energy_kj, &spec.classes_kj);
-            a.class_kj = a.class.map(|c| spec.classes_kj[c]);
-            a.class_label = class_label(a.class, spec);
-            a.cost = cost(a.length_m, a.class, spec);
-            let mut notes = Vec::new();
-            if !a.meets_target {
-                notes.push(format!("intercepts {:.1} % < target {:.1} %", 100.0 * a.share, 100.0 * spec.target_share));
-            }
-            if a.share_of_released < spec.min_share_of_released {
-                notes.push(format!(
-                    "stops {:.1} % of all rocks (< {:.0} %)",
-                    100.0 * a.share_of_released,
-                    100.0 * spec.min_share_of_released
-                ));
-            }
-            if a.class.is_none() {
-                notes.push("energy above the largest class: consider a dam or another position".into());
-            }
-            if a.fence_height_m > spec.max_fence_height_m {
-                notes.push(format!("higher than a fence ({} m)", spec.max_fence_height_m));
-            }
-            a.note = notes.join("; ");
+            let largest_of_each = ModelDesign {
+                passing_height_max_m: fold(|d| d.passing_height_max_m),
+                energy_p95_kj: fold(|d| d.energy_p95_kj),
+                energy_p99_kj: fold(|d| d.energy_p99_kj),
+                energy_max_kj: fold(|d| d.energy_max_kj),
+                speed_p95_mps: fold(|d| d.speed_p95_mps),
+                ..strong.clone()
+            };
+            a.meets_target = sizing.iter().all(|(m, d)| d.intercepted >= need(reaching[*m]));
+            take(&mut a, worst, tall, strong, &largest_of_each);
+            finish(&mut a, strong.design_energy_kj, spec);
+            a.per_model = per_model;
             a
         })
         .collect();
+    rank(&mut out, spec);
+    out
+}
+
+/// One model's (or the pooled rocks') figures from the rocks crossing the proposal's stretches `d`; `counts` are
+/// the rocks reaching the zone, those intercepted and all released.
+fn design_of(model: &str, d: &QuantityDists, counts: (u64, u64, u64), sizes: bool, spec: &DesignSpec) -> ModelDesign {
+    let (reaching, intercepted, released) = counts;
+    let h95 = d.quantile(Quantity::Height, 0.95);
+    let size95 = d.quantile(Quantity::Size, 0.95);
+    let e = [0.95, 0.99].map(|q| d.quantile(Quantity::Kinetic, q));
+    let e_max = d.max(Quantity::Kinetic);
+    ModelDesign {
+        model: model.to_string(),
+        rocks_reaching: reaching,
+        intercepted,
+        share: intercepted as f64 / reaching.max(1) as f64,
+        share_of_released: intercepted as f64 / released.max(1) as f64,
+        sizes,
+        rocks_crossing: d.count() as u64,
+        passing_height_p95_m: h95,
+        passing_height_max_m: d.max(Quantity::Height),
+        rock_size_p95_m: size95,
+        design_height_m: h95 + size95,
+        energy_p95_kj: e[0],
+        energy_p99_kj: e[1],
+        energy_max_kj: e_max,
+        design_energy_kj: match spec.class_energy {
+            ClassEnergy::P95 => e[0],
+            ClassEnergy::P99 => e[1],
+            ClassEnergy::Max => e_max,
+        },
+        speed_p95_mps: d.quantile(Quantity::Speed, 0.95),
+        crossing_angle_p50_deg: d.quantile(Quantity::Angle, 0.5),
+    }
+}
+
+/// Fills an assessment's figures: counts and shares from `counts`, the height from `tall`, the class's model
+/// from `strong`, the largest passing height, energies and speed from `largest`.
+fn take(a: &mut Assessment, counts: &ModelDesign, tall: &ModelDesign, strong: &ModelDesign, largest: &ModelDesign) {
+    a.rocks_reaching = counts.rocks_reaching;
+    a.intercepted = counts.intercepted;
+    a.share = counts.share;
+    a.rocks_crossing = counts.rocks_crossing;
+    a.share_of_released = counts.share_of_released;
+    a.passing_height_p95_m = tall.passing_height_p95_m;
+    a.rock_size_p95_m = tall.rock_size_p95_m;
+    a.design_height_m = tall.design_height_m;
+    a.height_from = tall.model.clone();
+    a.passing_height_max_m = largest.passing_height_max_m;
+    a.energy_p95_kj = largest.energy_p95_kj;
+    a.energy_p99_kj = largest.energy_p99_kj;
+    a.energy_max_kj = largest.energy_max_kj;
+    a.speed_p95_mps = largest.speed_p95_mps;
+    a.crossing_angle_p50_deg = strong.crossing_angle_p50_deg;
+    a.energy_from = strong.model.clone();
+}
+
+/// The fence height, class (by `design_energy_kj`), cost and notes of a sized assessment.
+fn finish(a: &mut Assessment, design_energy_kj: f64, spec: &DesignSpec) {
+    a.fence_height_m = (a.design_height_m / 0.5).ceil() * 0.5;
+    a.class = class_for(design_energy_kj, &spec.classes_kj);
+    a.class_kj = a.class.map(|c| spec.classes_kj[c]);
+    a.class_label = class_label(a.class, spec);
+    a.cost = cost(a.length_m, a.class, spec);
+    let mut notes = Vec::new();
+    if !a.meets_target {
+        notes.push(format!("intercepts {:.1} % < target {:.1} %", 100.0 * a.share, 100.0 * spec.target_share));
+    }
+    if a.share_of_released < spec.min_share_of_released {
+        notes.push(format!(
+            "stops {:.1} % of all rocks (< {:.0} %)",
+            100.0 * a.share_of_released,
+            100.0 * spec.min_share_of_released
+        ));
+    }
+    if a.class.is_none() {
+        notes.push("energy above the largest class: consider a dam or another position".into());
+    }
+    if a.fence_height_m > spec.max_fence_height_m {
+        notes.push(format!("higher than a fence ({} m)", spec.max_fence_height_m));
+    }
+    a.note = notes.join("; ");
+}
+
+/// Ranks the sized assessments (see the module docs).
+fn rank(out: &mut [Assessment], spec: &DesignSpec) {
     // Criteria a proposal should meet, most important first: the target share; a standard class and a fence height
     // that can be built; a useful share of all rocks. Candidates are ranked by what they miss, then by cost.
     let missed = |a: &Assessment| {
@@ -469,7 +516,6 @@ pub fn assess(candidates: &[Candidate], runs: &[ModelRun], spec: &DesignSpec) ->
     for (r, &i) in order.iter().enumerate() {
         out[i].rank = Some(r + 1);
     }
-    out
 }
 
 #[cfg(test)]

@@ -26,7 +26,7 @@ pub mod settings;
 pub use candidates::{Candidate, CandidateKind};
 pub use design::{Assessment, Status};
 pub use residual::Residual;
-pub use settings::{ClassEnergy, DesignSpec};
+pub use settings::{AcrossModels, ClassEnergy, DesignSpec};
 
 use crate::collector::{Collector, ProtectedZone};
 use crate::error::{Error, Result};

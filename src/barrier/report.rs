@@ -487,10 +487,19 @@ pub fn floor_sentence(study: &BarrierStudy) -> Option<String> {
 }
 
 /// What the models are, in a sentence.
-fn models_sentence(study: &BarrierStudy) -> String {
+fn models_sentence(sc: &Scenario, study: &BarrierStudy) -> String {
+    let rule = match sc.file.barrier_design.across_models {
+        super::AcrossModels::Worst => {
+            "the proposals intercept the target share in every model, with the height and class of the model that \
+             asks most"
+        }
+        super::AcrossModels::Pooled => {
+            "their rocks are pooled into one ensemble (`across_models = \"pooled\"`): the proposals intercept the \
+             target share of all of them, with the P95s of all of them"
+        }
+    };
     format!(
-        "{} models run the same rocks: the proposals intercept the target share in every model, with the height and \
-         class of the model that asks most (per model below; maps are the first model's, {}).",
+        "{} models run the same rocks: {rule} (per model below; maps are the first model's, {}).",
         study.models.len(),
         study.models[0].name
     )
@@ -520,7 +529,7 @@ fn markdown(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment]) -> String
     if let (Some(a), true) = (best.first(), study.models.len() > 1) {
         s.push_str(&format!(
             "\n## The models\n\n{}\n\nProposal #1, {}:\n\n| {} |\n|{}\n",
-            models_sentence(study),
+            models_sentence(sc, study),
             a.name,
             MODEL_HEAD.join(" | "),
             "---|".repeat(MODEL_HEAD.len())
@@ -587,7 +596,7 @@ fn index_html(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment], files: 
     ));
     if let (Some(a), true) = (best.first(), study.models.len() > 1) {
         page.h2("The models");
-        page.note(&models_sentence(study));
+        page.note(&models_sentence(sc, study));
         let rows: Vec<Vec<String>> =
             model_rows(study, a).into_iter().map(|r| r.iter().map(|c| escape(c)).collect()).collect();
         // The models that set the height and the class stand out.

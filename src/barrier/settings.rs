@@ -12,6 +12,7 @@
 //! max_fence_height_m = 8.0
 //! class_cost_per_m = [1.0, 1.6, 2.2, 3.2, 3.9, 4.5, 5.5, 6.7]
 //! best = 5
+//! across_models = "worst"             # worst | pooled (with `talus barrier --models`)
 //! ```
 
 use crate::error::{Error, Result};
@@ -28,6 +29,20 @@ pub enum ClassEnergy {
     P99,
     /// The largest.
     Max,
+}
+
+/// How a barrier designed against several models (`talus barrier --models`) takes them (ours).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AcrossModels {
+    /// It must hold under every model: the target share in each, the height and class of the model that asks most
+    /// (default). Grows with the number of models even when they agree (the worst of n).
+    #[default]
+    Worst,
+    /// The models' rocks pooled, as one ensemble: the predictive distribution that averages the models with equal
+    /// weights (Bayesian model averaging with equal weights, Hoeting et al. 1999, Statistical Science 14(4)); the
+    /// target share and the P95s of the pooled rocks. Does not grow with the number of models.
+    Pooled,
 }
 
 /// The standard energy classes of flexible rockfall barriers, kJ (EAD 340059-00-0106, formerly ETAG 027: classes
@@ -80,6 +95,8 @@ pub struct DesignSpec {
     pub best: usize,
     /// Re-run with the best proposal in place (default true).
     pub rerun: bool,
+    /// With several models: `worst` (default) or `pooled`, see [`AcrossModels`].
+    pub across_models: AcrossModels,
 }
 
 impl Default for DesignSpec {
@@ -103,6 +120,7 @@ impl Default for DesignSpec {
             class_cost_per_m: DEFAULT_CLASS_COST_PER_M.to_vec(),
             best: 5,
             rerun: true,
+            across_models: AcrossModels::Worst,
         }
     }
 }

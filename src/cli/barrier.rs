@@ -51,6 +51,10 @@ pub struct BarrierArgs {
     /// OUT/floor/): the design Monte Carlo noise alone asks for, beside which the models' design is read.
     #[arg(long, requires = "models")]
     floor: bool,
+    /// With --models: pool the models' rocks into one ensemble (the target share and P95s of all their rocks)
+    /// instead of requiring the barrier to hold under each model (barrier_design.across_models = "pooled").
+    #[arg(long, requires = "models")]
+    pooled: bool,
 }
 
 pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
@@ -63,6 +67,9 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
         file.barrier_design.best = b;
     }
     file.barrier_design.rerun &= !a.no_rerun;
+    if a.pooled {
+        file.barrier_design.across_models = talus::barrier::AcrossModels::Pooled;
+    }
     file.output.ascii_grids |= a.ascii_grids;
     let sc = file
         .resolve(&a.scenario)
@@ -116,7 +123,8 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
             x.cost.map_or("-".to_string(), |c| format!("{c:.0}"))
         );
     }
-    if let (Some(best), true) = (ranked.first(), models.len() > 1) {
+    let worst = sc.file.barrier_design.across_models == talus::barrier::AcrossModels::Worst;
+    if let (Some(best), true) = (ranked.first(), models.len() > 1 && worst) {
         println!(
             "#1 over {} models: height set by {}, class by {}; worst share {:.1} %",
             models.len(),
