@@ -22,14 +22,15 @@
 //! **Ranking** (ours). A proposal should, in this order of importance, meet the target share; be buildable (a
 //! standard class, and a fence no higher than `max_fence_height_m`); and intercept at least `min_share_of_released`
 //! of all released rocks. Sized candidates are ranked by whether they meet the target, then by how many of the two
-//! buildability criteria they miss, then by whether they meet the share, then by cost (then length); each missed
-//! criterion is written in the `note` column. Candidates with fewer than `min_rocks` rocks reaching their zone are
-//! listed but not sized (too few to estimate a P95).
+//! buildability criteria they miss, then by whether they meet the share, then by cost (then fence height, then
+//! length); each missed criterion is written in the `note` column. Candidates with fewer than `min_rocks` rocks
+//! reaching their zone are listed but not sized (too few to estimate a P95).
 //!
 //! **Several models** (ours; `talus barrier --models`, made for the fold models of `talus calibrate --kfold`). Each
 //! model runs the same rocks; the barrier is the shortest run of stretches that holds the target share in every
 //! model, and its height and class are those of the model that asks most. The design then covers the calibration's
-//! uncertainty as far as the models span it, not the single best fit's figures alone.
+//! uncertainty as far as the models span it, not the single best fit's figures alone. With `across_models =
+//! "pooled"` the models' rocks are one ensemble instead (see [`super::AcrossModels`]).
 
 use super::candidates::{Candidate, CandidateKind};
 use super::classes::{class_for, class_label, cost};
@@ -510,6 +511,7 @@ fn rank(out: &mut [Assessment], spec: &DesignSpec) {
                 (None, Some(_)) => std::cmp::Ordering::Greater,
                 (None, None) => b.share.total_cmp(&a.share),
             })
+            .then(a.fence_height_m.total_cmp(&b.fence_height_m))
             .then(a.length_m.total_cmp(&b.length_m))
             .then(i.cmp(&j))
     });
