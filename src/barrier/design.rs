@@ -373,35 +373,36 @@ pub fn assess(candidates: &[Candidate], runs: &[ModelRun], spec: &DesignSpec) ->
                     design_of(run.name, &dists[m], counts, sizes[m], spec)
                 })
                 .collect();
-            if pooled {
+            // The figures the assessment takes: from the pooled rocks, or from the models that ask most.
+            let (pooled_design, largest_of_each);
+            let (counts, tall, strong, largest) = if pooled {
                 let mut d = QuantityDists::default();
                 dists.iter().for_each(|x| d.merge(x));
                 let released = runs.iter().map(|r| r.tally.rocks).sum();
-                let all = design_of("pooled", &d, (reaching_all, intercepted.iter().sum(), released), true, spec);
-                a.meets_target = all.intercepted >= need(reaching_all);
-                take(&mut a, &all, &all, &all, &all);
-                finish(&mut a, all.design_energy_kj, spec);
-                a.per_model = per_model;
-                return a;
-            }
-            let sizing: Vec<(usize, &ModelDesign)> = per_model.iter().enumerate().filter(|(m, _)| sizes[*m]).collect();
-            let largest = |f: fn(&ModelDesign) -> f64| {
-                sizing.iter().map(|(_, d)| *d).max_by(|x, y| f(x).total_cmp(&f(y))).expect("a model sizes")
+                let counts = (reaching_all, intercepted.iter().sum(), released);
+                pooled_design = design_of("pooled", &d, counts, true, spec);
+                a.meets_target = pooled_design.intercepted >= need(reaching_all);
+                (&pooled_design, &pooled_design, &pooled_design, &pooled_design)
+            } else {
+                let sizing: Vec<(usize, &ModelDesign)> =
+                    per_model.iter().enumerate().filter(|(m, _)| sizes[*m]).collect();
+                let largest = |f: fn(&ModelDesign) -> f64| {
+                    sizing.iter().map(|(_, d)| *d).max_by(|x, y| f(x).total_cmp(&f(y))).expect("a model sizes")
+                };
+                let strong = largest(|d| d.design_energy_kj);
+                let fold = |f: fn(&ModelDesign) -> f64| sizing.iter().map(|(_, d)| f(d)).fold(f64::NAN, f64::max);
+                largest_of_each = ModelDesign {
+                    passing_height_max_m: fold(|d| d.passing_height_max_m),
+                    energy_p95_kj: fold(|d| d.energy_p95_kj),
+                    energy_p99_kj: fold(|d| d.energy_p99_kj),
+                    energy_max_kj: fold(|d| d.energy_max_kj),
+                    speed_p95_mps: fold(|d| d.speed_p95_mps),
+                    ..strong.clone()
+                };
+                a.meets_target = sizing.iter().all(|(m, d)| d.intercepted >= need(reaching[*m]));
+                (largest(|d| -d.share), largest(|d| d.design_height_m), strong, &largest_of_each)
             };
-            let worst = largest(|d| -d.share);
-            let tall = largest(|d| d.design_height_m);
-            let strong = largest(|d| d.design_energy_kj);
-            let fold = |f: fn(&ModelDesign) -> f64| sizing.iter().map(|(_, d)| f(d)).fold(f64::NAN, f64::max);
-            let largest_of_each = ModelDesign {
-                passing_height_max_m: fold(|d| d.passing_height_max_m),
-                energy_p95_kj: fold(|d| d.energy_p95_kj),
-                energy_p99_kj: fold(|d| d.energy_p99_kj),
-                energy_max_kj: fold(|d| d.energy_max_kj),
-                speed_p95_mps: fold(|d| d.speed_p95_mps),
-                ..strong.clone()
-            };
-            a.meets_target = sizing.iter().all(|(m, d)| d.intercepted >= need(reaching[*m]));
-            take(&mut a, worst, tall, strong, &largest_of_each);
+            take(&mut a, counts, tall, strong, largest);
             finish(&mut a, strong.design_energy_kj, spec);
             a.per_model = per_model;
             a
