@@ -371,11 +371,7 @@ fn envelope_of(
         maps::render(&out_dir.join(format!("{stem}.png")), grid, style, Some(&dem), &overlays)?;
         outputs.extend([format!("{stem}.tif"), format!("{stem}.png")]);
         if ascii {
-            crate::io::ascii_grid::write_grid(&out_dir.join(format!("{stem}.asc")), grid)?;
-            outputs.push(format!("{stem}.asc"));
-            if grid.crs.wkt.is_some() {
-                outputs.push(format!("{stem}.prj"));
-            }
+            outputs.extend(crate::io::ascii_grid::write_grid_in(out_dir, &stem, grid)?);
         }
         Ok(())
     };

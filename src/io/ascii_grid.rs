@@ -236,6 +236,16 @@ pub fn write_grid(path: &Path, grid: &Grid) -> Result<()> {
     Ok(())
 }
 
+/// Writes `grid` as `dir/stem.asc` (and `stem.prj`, see [`write_grid`]); returns the names of the files written.
+pub fn write_grid_in(dir: &Path, stem: &str, grid: &Grid) -> Result<Vec<String>> {
+    write_grid(&dir.join(format!("{stem}.asc")), grid)?;
+    let mut names = vec![format!("{stem}.asc")];
+    if grid.crs.wkt.is_some() {
+        names.push(format!("{stem}.prj"));
+    }
+    Ok(names)
+}
+
 /// `dir/stem.prj` for `dir/stem.asc`.
 fn prj_path(path: &Path) -> PathBuf {
     path.with_extension("prj")

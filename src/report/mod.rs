@@ -100,11 +100,7 @@ pub fn write_run_products(p: &RunProducts) -> Result<Vec<String>> {
             .zip(p.grids.iter())
             .chain(ZONE_RASTERS.iter().map(|r| r.0).zip([&levels, &matrix]));
         for (stem, g) in all {
-            crate::io::ascii_grid::write_grid(&dir.join(format!("{stem}.asc")), g)?;
-            out.push(format!("{stem}.asc"));
-            if g.crs.wkt.is_some() {
-                out.push(format!("{stem}.prj"));
-            }
+            out.extend(crate::io::ascii_grid::write_grid_in(dir, stem, g)?);
         }
     }
     if !p.paths.is_empty() {
