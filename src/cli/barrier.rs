@@ -3,10 +3,9 @@
 use super::progress;
 use anyhow::Context;
 use clap::Args;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use talus::barrier::report::floor_sentence;
 use talus::barrier::{propose_models, Status};
-use talus::envelope::{model_names, on_site};
 use talus::scenario::ScenarioFile;
 
 /// Propose rockfall barrier positions: candidate lines (contours, bench crests and toes, offsets of a toe or asset
@@ -74,12 +73,7 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
     let sc = file
         .resolve(&a.scenario)
         .map_err(|e| anyhow::anyhow!("{e}\n  (command-line values are checked as barrier_design.* keys)"))?;
-    let mut models = Vec::new();
-    let paths: Vec<&Path> = a.models.iter().map(PathBuf::as_path).collect();
-    for (path, name) in paths.iter().zip(model_names(&paths)) {
-        let model = ScenarioFile::read(path)?;
-        models.push((name, on_site(&sc.file, &model, &path.display().to_string())?.resolve(&a.scenario)?));
-    }
+    let mut models = super::load_models(&a.models, Some((&sc.file, &a.scenario)))?;
     if models.is_empty() {
         models.push(("scenario".to_string(), sc.clone()));
     }

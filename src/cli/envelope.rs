@@ -5,7 +5,7 @@ use anyhow::Context;
 use clap::Args;
 use std::path::{Path, PathBuf};
 use talus::envelope::profile::run_profile_envelope;
-use talus::envelope::{model_names, on_site, run_envelope};
+use talus::envelope::{model_names, run_envelope};
 use talus::lumped2d::ProfileScenario;
 use talus::scenario::ScenarioFile;
 
@@ -53,18 +53,14 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
     if is_profile(&a.scenarios[0]) {
         return run_profiles(&a);
     }
-    let paths: Vec<&Path> = a.scenarios.iter().map(PathBuf::as_path).collect();
     let site = a.site.as_ref().map(|p| ScenarioFile::read(p).map(|f| (f, p))).transpose()?;
-    let mut scenarios = Vec::new();
-    for (path, name) in paths.iter().zip(model_names(&paths)) {
-        let model = ScenarioFile::read(path)?;
-        let mut scenario = match &site {
-            None => model.resolve(path)?,
-            Some((site, site_path)) => on_site(site, &model, &path.display().to_string())?.resolve(site_path)?,
-        };
-        scenario.file.output.ascii_grids |= a.ascii_grids;
-        scenarios.push((scenario, name));
-    }
+    let models = super::load_models(&a.scenarios, site.as_ref().map(|(f, p)| (f, p.as_path())))?;
+    let scenarios: Vec<_> = (models.into_iter())
+        .map(|(name, mut scenario)| {
+            scenario.file.output.ascii_grids |= a.ascii_grids;
+            (scenario, name)
+        })
+        .collect();
     let pb = progress::bar(0, "rocks");
     let n = scenarios.len();
     let runs = if a.floor { 2 * n } else { n };

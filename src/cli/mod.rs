@@ -44,6 +44,28 @@ impl RunControl {
     }
 }
 
+/// The named models of `paths` (names by [`talus::envelope::model_names`]), each read and resolved, or, with a
+/// `site` (its file and path), carried onto it by [`talus::envelope::on_site`] (`talus envelope --site`,
+/// `talus barrier --models`).
+pub fn load_models(
+    paths: &[std::path::PathBuf],
+    site: Option<(&talus::scenario::ScenarioFile, &std::path::Path)>,
+) -> anyhow::Result<Vec<(String, talus::scenario::Scenario)>> {
+    let paths: Vec<&std::path::Path> = paths.iter().map(|p| p.as_path()).collect();
+    let mut models = Vec::new();
+    for (path, name) in paths.iter().zip(talus::envelope::model_names(&paths)) {
+        let model = talus::scenario::ScenarioFile::read(path)?;
+        let scenario = match site {
+            None => model.resolve(path)?,
+            Some((site, site_path)) => {
+                talus::envelope::on_site(site, &model, &path.display().to_string())?.resolve(site_path)?
+            }
+        };
+        models.push((name, scenario));
+    }
+    Ok(models)
+}
+
 /// Runs `go` on `threads` threads (all cores when `None`) for the 2DLM commands, whose engine uses rayon's pool.
 pub fn with_threads<T: Send>(
     threads: Option<usize>,
