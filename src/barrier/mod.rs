@@ -102,12 +102,11 @@ pub fn protected_zone(spec: &DesignSpec, terrain: &Terrain) -> Option<ProtectedZ
 /// design that Monte Carlo noise alone asks for against `n` models, beside which a design against `n` calibrated
 /// models is read (`talus barrier --floor`; ours, as `talus envelope --floor`).
 fn seed_floor(model: &Scenario, seed: u64, n: usize) -> Vec<(String, Scenario)> {
-    (0..n as u64)
-        .map(|i| seed.wrapping_add(i))
-        .map(|s| {
+    (crate::envelope::floor_seeds(seed, n).into_iter())
+        .map(|(name, seed)| {
             let mut sc = model.clone();
-            sc.file.simulation.seed = s;
-            (format!("seed_{s}"), sc)
+            sc.file.simulation.seed = seed;
+            (name, sc)
         })
         .collect()
 }

@@ -293,9 +293,8 @@ pub fn run_envelope(
         models.iter().map(|(scenario, name)| Member { scenario, name: name.clone(), seed }).collect();
     let mut summary = envelope_of(&runs, overrides, out_dir, progress)?;
     if floor {
-        let runs: Vec<Member> = (0..n as u64)
-            .map(|i| seed.wrapping_add(i))
-            .map(|s| Member { scenario: &models[0].0, name: format!("seed_{s}"), seed: s })
+        let runs: Vec<Member> = (floor_seeds(seed, n).into_iter())
+            .map(|(name, seed)| Member { scenario: &models[0].0, name, seed })
             .collect();
         let floor_dir = out_dir.join("floor");
         let f = envelope_of(&runs, overrides, &floor_dir, &|i, d, t| progress(n + i, d, t))?;
@@ -310,6 +309,12 @@ pub fn run_envelope(
     summary.wall_time_s = t0.elapsed().as_secs_f64();
     write_summary(out_dir, &summary, &format!("{n} models, each with seed {seed}"))?;
     Ok(summary)
+}
+
+/// The runs of a floor: `n` seeds from `seed` on, each named `seed_S` (its folder under `floor/models/`), for
+/// `talus envelope --floor` and `talus barrier --floor`.
+pub fn floor_seeds(seed: u64, n: usize) -> Vec<(String, u64)> {
+    (0..n as u64).map(|i| seed.wrapping_add(i)).map(|s| (format!("seed_{s}"), s)).collect()
 }
 
 /// One run of an envelope.

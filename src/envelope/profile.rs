@@ -129,9 +129,9 @@ pub fn run_profile_envelope(
     let members: Vec<(&ProfileScenario, String, u64)> = scenarios.iter().map(|(s, n)| (s, n.clone(), seed)).collect();
     let mut summary = profile_envelope_of(&members, out_dir)?;
     if floor {
-        let n = scenarios.len() as u64;
-        let members: Vec<(&ProfileScenario, String, u64)> =
-            (0..n).map(|i| seed.wrapping_add(i)).map(|s| (&scenarios[0].0, format!("seed_{s}"), s)).collect();
+        let members: Vec<(&ProfileScenario, String, u64)> = (super::floor_seeds(seed, scenarios.len()).into_iter())
+            .map(|(name, seed)| (&scenarios[0].0, name, seed))
+            .collect();
         let f = profile_envelope_of(&members, &out_dir.join("floor"))?;
         write_charts(&out_dir.join("floor"), false)?;
         write_profile_summary(&out_dir.join("floor"), &f)?;
