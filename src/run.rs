@@ -445,9 +445,7 @@ pub fn run_scenario_with(
         ),
         barriers: crate::collector::facts::barrier_facts(&terrain.barriers, &collector_stats),
     };
-    let json = serde_json::to_string_pretty(&summary)
-        .map_err(|e| Error::invalid("summary.json", e.to_string(), "report this as a bug"))?;
-    crate::io::write_bytes_atomic(&out_dir.join("summary.json"), json.as_bytes())?;
+    crate::io::write_json_atomic(&out_dir.join("summary.json"), &summary)?;
     crate::report::write_run_index(&products, &summary)?;
     Ok(RunOutput { summary, grids, terrain: setup.terrain.clone(), collectors, collector_stats })
 }

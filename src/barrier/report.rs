@@ -291,9 +291,7 @@ pub fn write_study(dir: &Path, sc: &Scenario, terrain: &Terrain, study: &Barrier
             },
         })).collect::<Vec<_>>(),
     });
-    let text = serde_json::to_string_pretty(&json)
-        .map_err(|e| Error::invalid("barrier_study.json", e.to_string(), "report this as a bug"))?;
-    crate::io::write_bytes_atomic(&dir.join("barrier_study.json"), text.as_bytes())?;
+    crate::io::write_json_atomic(&dir.join("barrier_study.json"), &json)?;
     out.push("barrier_study.json".into());
     out.push("index.html".into());
     let html = index_html(sc, study, &best, &out);

@@ -367,10 +367,7 @@ pub fn write_outputs(result: &StudyResult, records: Option<&[HistoricRecord]>, o
         outputs,
     };
     write_bytes_atomic(&out_dir.join("report.md"), report(result, &summary).as_bytes())?;
-    let path = out_dir.join("summary.json");
-    let json = serde_json::to_string_pretty(&summary)
-        .map_err(|e| Error::format(path.display().to_string(), e.to_string(), "report this as a bug"))?;
-    write_bytes_atomic(&path, format!("{json}\n").as_bytes())?;
+    crate::io::write_json_atomic(&out_dir.join("summary.json"), &summary)?;
     Ok(summary)
 }
 

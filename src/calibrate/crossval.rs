@@ -7,7 +7,7 @@ use super::params::Params;
 use super::report::{metrics_header, metrics_rows};
 use super::runs::{assign_groups, FieldRun};
 use super::{calibrate, runs, split, stats, CalibrationConfig, Model};
-use crate::error::{Error, Result};
+use crate::error::Result;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 use std::time::Instant;
@@ -289,9 +289,7 @@ pub fn repeated_cross_validation(
 
 /// Writes `out/STEM.json` and `out/STEM.md`.
 fn write_study(out: &Path, stem: &str, study: &impl Serialize, markdown: &str) -> Result<()> {
-    let json = serde_json::to_string_pretty(study)
-        .map_err(|e| Error::invalid(format!("{stem}.json"), e.to_string(), "this is a bug: please report it"))?;
-    crate::io::write_bytes_atomic(&out.join(format!("{stem}.json")), json.as_bytes())?;
+    crate::io::write_json_atomic(&out.join(format!("{stem}.json")), study)?;
     crate::io::write_bytes_atomic(&out.join(format!("{stem}.md")), markdown.as_bytes())
 }
 

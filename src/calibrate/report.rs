@@ -186,9 +186,7 @@ pub fn write_report(
     scenario: &[(String, String)],
 ) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let json = serde_json::to_string_pretty(report)
-        .map_err(|e| Error::invalid("report.json", e.to_string(), "this is a bug: please report it"))?;
-    crate::io::write_bytes_atomic(&dir.join("report.json"), json.as_bytes())?;
+    crate::io::write_json_atomic(&dir.join("report.json"), report)?;
     let runs = model.runs();
     write_runs_csv(&dir.join("runs.csv"), model, base_cal, final_cal, base_hold, final_hold)?;
     if runs.iter().any(|r| !r.impacts.is_empty()) {

@@ -447,9 +447,7 @@ fn envelope_of(
 
 /// Writes `dir/envelope.json` and `dir/envelope.md`; `members` says what was run.
 fn write_summary(dir: &Path, summary: &EnvelopeSummary, members: &str) -> Result<()> {
-    let json = serde_json::to_string_pretty(summary)
-        .map_err(|e| Error::invalid("envelope.json", e.to_string(), "this is a bug: please report it"))?;
-    crate::io::write_bytes_atomic(&dir.join("envelope.json"), format!("{json}\n").as_bytes())?;
+    crate::io::write_json_atomic(&dir.join("envelope.json"), summary)?;
     crate::io::write_bytes_atomic(&dir.join("envelope.md"), markdown(summary, members).as_bytes())
 }
 

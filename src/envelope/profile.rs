@@ -238,9 +238,7 @@ fn profile_envelope_of(members: &[(&ProfileScenario, String, u64)], out_dir: &Pa
 }
 
 fn write_profile_summary(dir: &Path, s: &ProfileEnvelope) -> Result<()> {
-    let json = serde_json::to_string_pretty(s)
-        .map_err(|e| Error::invalid("envelope.json", e.to_string(), "this is a bug: please report it"))?;
-    crate::io::write_bytes_atomic(&dir.join("envelope.json"), format!("{json}\n").as_bytes())?;
+    crate::io::write_json_atomic(&dir.join("envelope.json"), s)?;
     let f = super::fmt_opt;
     let mut md = format!(
         "# Envelope over {} profile runs\n\n`envelopes.csv` and `collectors.csv` give each column of the runs' own \

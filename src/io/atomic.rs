@@ -34,6 +34,13 @@ pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic(path, |w| w.write_all(bytes).map_err(|e| Error::io(path, e)))
 }
 
+/// Writes `value` to `path` atomically as pretty-printed JSON ending in a newline.
+pub fn write_json_atomic(path: &Path, value: &impl serde::Serialize) -> Result<()> {
+    let json = serde_json::to_string_pretty(value)
+        .map_err(|e| Error::format(path.display().to_string(), e.to_string(), "this is a bug: please report it"))?;
+    write_bytes_atomic(path, format!("{json}\n").as_bytes())
+}
+
 /// `dir/name.ext` becomes `dir/.name.ext.tmp`.
 pub fn temp_path(path: &Path) -> PathBuf {
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();

@@ -10,7 +10,7 @@ pub mod obj;
 pub mod points;
 pub mod stl;
 
-pub use atomic::{write_atomic, write_bytes_atomic};
+pub use atomic::{write_atomic, write_bytes_atomic, write_json_atomic};
 
 /// A triangle mesh as read from a file, in the file's own frame and axes (no origin shift, no axis swap).
 #[derive(Debug, Clone, Default, PartialEq)]

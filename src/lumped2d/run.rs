@@ -455,9 +455,6 @@ pub fn run_profile(scenario: &ProfileScenario, out_dir: &Path) -> Result<Profile
             .map(String::from)
             .to_vec(),
     };
-    let path = out_dir.join("summary.json");
-    let json = serde_json::to_string_pretty(&summary)
-        .map_err(|e| Error::format(path.display().to_string(), e.to_string(), "report this as a bug"))?;
-    crate::io::write_bytes_atomic(&path, format!("{json}\n").as_bytes())?;
+    crate::io::write_json_atomic(&out_dir.join("summary.json"), &summary)?;
     Ok(summary)
 }
