@@ -414,6 +414,10 @@ fn barrier_against_several_models_holds_in_each_and_takes_the_largest_design() {
         }
     }
     assert!(checked > 3, "{checked} candidates crossed in both models");
+    // The share of released rocks is of both models' rocks, and the report says so.
+    let md = std::fs::read_to_string(dir.path().join("pooled/proposals.md")).unwrap();
+    let released = 2 * pooled.models[0].without.summary.rocks;
+    assert!(md.contains(&format!("of all {released})")), "{md}");
 
     let best = both.ranked()[0];
     assert!(best.meets_target, "{}: {}", best.name, best.note);
@@ -499,4 +503,23 @@ fn the_shipped_tschamut_barrier_site_takes_a_calibrated_model() {
     let offsets = cands.iter().filter(|c| matches!(c.kind, CandidateKind::AssetOffset { .. })).count();
     assert_eq!(offsets, 3, "{:?}", cands.iter().map(|c| &c.name).collect::<Vec<_>>());
     assert!(cands.len() > 20);
+}
+
+/// `--models` on a site given by a relative path whose campaign source is relative too (the README's command, run
+/// from the repository): the site's paths resolve once, against the site file.
+#[test]
+fn barrier_models_on_a_relative_site_with_a_campaign_source() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("study");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
+        .current_dir(root())
+        .args(["barrier", "examples/barrier_tschamut.toml", "--rocks", "40", "--no-rerun", "--out"])
+        .arg(&out)
+        .args(["--models", "examples/calibrated_tschamut.toml", "examples/calibrated_tschamut.toml"])
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    let runs = std::fs::read_dir(out.join("models")).unwrap().map(|e| e.unwrap().path()).collect::<Vec<_>>();
+    assert_eq!(runs.len(), 2, "{runs:?}");
+    assert!(runs.iter().all(|r| r.join("without_barrier/summary.json").is_file()), "{runs:?}");
 }

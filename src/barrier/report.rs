@@ -321,6 +321,13 @@ fn class_energy_text(sc: &Scenario) -> &'static str {
 
 /// One proposal's table cells: rank, position, length, fence height (design height), energies, class, share, cost,
 /// note.
+/// The rocks released behind a proposal's counts: one model's run, or with `across_models = "pooled"` every
+/// model's.
+fn released_behind_counts(sc: &Scenario, study: &BarrierStudy) -> usize {
+    let pooled = sc.file.barrier_design.across_models == super::AcrossModels::Pooled;
+    study.models[0].without.summary.rocks * if pooled { study.models.len() } else { 1 }
+}
+
 fn proposal_cells(a: &Assessment, n_rocks: usize) -> Vec<String> {
     vec![
         a.rank.map_or(String::new(), |r| r.to_string()),
@@ -519,7 +526,7 @@ fn markdown(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment]) -> String
     ));
     s.push_str(&format!("| {} |\n|{}\n", PROPOSAL_HEAD.join(" | "), "---|".repeat(PROPOSAL_HEAD.len())));
     for a in best {
-        s.push_str(&format!("| {} |\n", proposal_cells(a, n).join(" | ")));
+        s.push_str(&format!("| {} |\n", proposal_cells(a, released_behind_counts(sc, study)).join(" | ")));
     }
     if best.is_empty() {
         s.push_str("\nNo candidate could be sized: too few rocks reach any candidate's protected zone.\n");
@@ -568,8 +575,10 @@ fn index_html(sc: &Scenario, study: &BarrierStudy, best: &[&Assessment], files: 
     );
     let mut page = Page::new(&title, &sub);
     page.h2("Proposed barriers");
-    let rows: Vec<Vec<String>> =
-        best.iter().map(|a| proposal_cells(a, n).iter().map(|c| escape(c)).collect()).collect();
+    let rows: Vec<Vec<String>> = best
+        .iter()
+        .map(|a| proposal_cells(a, released_behind_counts(sc, study)).iter().map(|c| escape(c)).collect())
+        .collect();
     page.raw(&table(&PROPOSAL_HEAD, &rows, &[1, 8], &[0]));
     page.note(&format!(
         "Protected zone: {}. Each proposal is the shortest stretch of its candidate line that intercepts {} % of the rocks reaching the zone; fence height = P95 passing height of the rocks' lowest point + P95 rock size, rounded up to 0.5 m; class by the {} kinetic energy among the standard classes {} kJ; cost in relative units (length × {} per metre by class). All candidates: candidates.csv.",

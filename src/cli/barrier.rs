@@ -70,10 +70,11 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
         file.barrier_design.across_models = talus::barrier::AcrossModels::Pooled;
     }
     file.output.ascii_grids |= a.ascii_grids;
-    let sc = file
+    let sc = (file.clone())
         .resolve(&a.scenario)
         .map_err(|e| anyhow::anyhow!("{e}\n  (command-line values are checked as barrier_design.* keys)"))?;
-    let mut models = super::load_models(&a.models, Some((&sc.file, &a.scenario)))?;
+    // The models take the site as written (its paths relative to the scenario file), not as resolved.
+    let mut models = super::load_models(&a.models, Some((&file, &a.scenario)))?;
     if models.is_empty() {
         models.push(("scenario".to_string(), sc.clone()));
     }
@@ -117,15 +118,23 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
             x.cost.map_or("-".to_string(), |c| format!("{c:.0}"))
         );
     }
-    let worst = sc.file.barrier_design.across_models == talus::barrier::AcrossModels::Worst;
-    if let (Some(best), true) = (ranked.first(), models.len() > 1 && worst) {
-        println!(
-            "#1 over {} models: height set by {}, class by {}; worst share {:.1} %",
-            models.len(),
-            best.height_from,
-            best.energy_from,
-            100.0 * best.share
-        );
+    if let (Some(best), true) = (ranked.first(), models.len() > 1) {
+        match sc.file.barrier_design.across_models {
+            talus::barrier::AcrossModels::Worst => println!(
+                "#1 over {} models: height set by {}, class by {}; worst share {:.1} %",
+                models.len(),
+                best.height_from,
+                best.energy_from,
+                100.0 * best.share
+            ),
+            talus::barrier::AcrossModels::Pooled => println!(
+                "#1 over {} models pooled: {} of the {} rocks of all runs that reach the zone intercepted ({:.1} %)",
+                models.len(),
+                best.intercepted,
+                best.rocks_reaching,
+                100.0 * best.share
+            ),
+        }
     }
     if let Some(text) = floor_sentence(&study) {
         println!("{text} ({})", a.out.join("floor").display());
