@@ -13,13 +13,12 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[non_exhaustive]
 pub enum Error {
     /// A file could not be read or written. Check the path and its permissions.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {os_error}\n  how to fix: {}", path.display(), io_hint(os_error.kind()))]
     Io {
         /// The file.
         path: PathBuf,
-        /// The operating system's error.
-        #[source]
-        source: std::io::Error,
+        /// The operating system's error (in the message, not a separate source, so that it is printed once).
+        os_error: std::io::Error,
     },
     /// A file is malformed: `location` is `file:line` or `file` plus a field name.
     #[error("{location}: {message}\n  how to fix: {hint}")]
@@ -43,10 +42,28 @@ pub enum Error {
     },
 }
 
+/// How to fix an I/O error of this kind.
+fn io_hint(kind: std::io::ErrorKind) -> &'static str {
+    use std::io::ErrorKind::*;
+    match kind {
+        NotFound => {
+            "check the path: on the command line it is relative to the folder talus runs in, inside a scenario or \
+             settings file relative to that file"
+        }
+        PermissionDenied => "check the permissions of the file and its folder",
+        AlreadyExists => "a file of that name is in the way: an output folder must be a folder, not a file",
+        IsADirectory => "give a file, not a folder",
+        NotADirectory => "a part of the path is a file, not a folder",
+        InvalidData => "the file is not text (UTF-8) or not of the expected kind",
+        UnexpectedEof => "the file ends too early: it may be truncated; copy or export it again",
+        _ => "check the path, the disk and the permissions",
+    }
+}
+
 impl Error {
     /// An I/O error on `path`.
     pub fn io(path: impl AsRef<Path>, source: std::io::Error) -> Self {
-        Error::Io { path: path.as_ref().to_path_buf(), source }
+        Error::Io { path: path.as_ref().to_path_buf(), os_error: source }
     }
 
     /// A format error at `location` (`file:line` or `file: field`).

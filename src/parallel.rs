@@ -44,6 +44,17 @@ where
     }
 }
 
+/// The threads `requested` (0 = all cores) come to: what a run records as used.
+pub fn threads_used(requested: usize) -> usize {
+    #[cfg(feature = "parallel")]
+    return if requested == 0 { rayon::current_num_threads() } else { requested };
+    #[cfg(not(feature = "parallel"))]
+    {
+        let _ = requested;
+        1
+    }
+}
+
 /// `f(i)` for `i` in `0..n`, collected in order (see [`map_in_order`]).
 pub fn collect_in_order<T, F>(n: usize, threads: usize, f: F) -> Vec<T>
 where

@@ -394,6 +394,7 @@ pub fn run_scenario_with(
     let mut file = sc.file.clone();
     file.simulation.seed = setup.seed;
     file.simulation.rocks = Some(n);
+    let threads = crate::parallel::threads_used(threads);
     file.simulation.threads = Some(threads);
     file.output.paths = n_paths;
     file.output.endpoint_bandwidth_m = Some(bandwidth);

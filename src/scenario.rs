@@ -370,6 +370,13 @@ impl ScenarioFile {
                 ));
             }
         }
+        if let Some(code) = self.terrain.crs_epsg.filter(|c| !crate::io::geotiff::EPSG_CODES.contains(c)) {
+            return Err(Error::invalid(
+                f("terrain.crs_epsg"),
+                format!("EPSG code {code} cannot be stored in a GeoTIFF (1 to 32766)"),
+                "use the EPSG code of a projected or geographic CRS, e.g. 2056 (Swiss LV95), or leave the key out",
+            ));
+        }
         if !(self.terrain.slope_face_deg > 0.0 && self.terrain.slope_face_deg < 90.0) {
             return Err(Error::invalid(
                 f("terrain.slope_face_deg"),

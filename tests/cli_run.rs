@@ -295,13 +295,37 @@ fn bad_input_is_answered_with_where_what_and_how() {
     fails_cleanly(d, &scenario(d, "", 0.3, "-5.0"), &["rocks.mass_kg", "-5"]);
     // An unknown key.
     fails_cleanly(d, &scenario(d, "colour = \"red\"", 0.3, "300.0"), &["scenario.toml:", "unknown field `colour`"]);
-    // A missing scenario file.
+    // An EPSG code no GeoTIFF can hold: refused with the scenario, before a rock runs or a file is written.
+    let sc = scenario(d, "", 0.3, "300.0");
+    std::fs::write(&sc, std::fs::read_to_string(&sc).unwrap().replace("crs_epsg = 2056", "crs_epsg = 999999")).unwrap();
+    fails_cleanly(d, &sc, &["terrain.crs_epsg", "999999"]);
+    // A missing scenario file: named once with its operating-system error, and a fix.
     let o = talus()
         .args(["run", d.join("nope.toml").to_str().unwrap(), "--out", d.join("o").to_str().unwrap()])
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("nope.toml"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("nope.toml") && err.contains("how to fix"), "{err}");
+    assert_eq!(err.matches("os error").count(), 1, "{err}");
+}
+
+/// A closed standard output (`talus run ... | head -1`) neither panics nor stops the run short of its files.
+#[test]
+fn a_closed_standard_output_does_not_stop_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let sc = scenario(dir.path(), "", 0.3, "300.0");
+    let out = dir.path().join("out");
+    let mut child = talus()
+        .args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{:?}: {}", o.status, String::from_utf8_lossy(&o.stderr));
+    assert!(out.join("summary.json").is_file() && out.join("index.html").is_file());
 }
 
 #[test]

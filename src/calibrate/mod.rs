@@ -300,8 +300,7 @@ pub fn calibrate(
             holdout: hold.iter().filter(|&&i| runs[i].group == g).count(),
         })
         .collect();
-    let threads =
-        if cfg.threads == 0 { std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1) } else { cfg.threads };
+    let threads = crate::parallel::threads_used(cfg.threads);
     let mut report = Report {
         model: model.kind().as_str().into(),
         calibration_ids: ids(cal),

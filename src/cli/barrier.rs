@@ -99,13 +99,21 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
     pb.finish_and_clear();
     let ranked = study.ranked();
     let sized = study.assessments.iter().filter(|x| x.status == Status::Sized).count();
-    println!("{} candidate lines, {} sized; best proposals:", study.candidates.len(), sized);
-    println!(
+    say!("{} candidate lines, {} sized; best proposals:", study.candidates.len(), sized);
+    say!(
         "{:>3}  {:<34} {:>8} {:>9} {:>10} {:>10}  {:<16} {:>8} {:>8}",
-        "#", "position", "length", "height", "E P95", "E max", "class", "share", "cost"
+        "#",
+        "position",
+        "length",
+        "height",
+        "E P95",
+        "E max",
+        "class",
+        "share",
+        "cost"
     );
     for x in ranked.iter().take(sc.file.barrier_design.best) {
-        println!(
+        say!(
             "{:>3}  {:<34} {:>6.0} m {:>7.1} m {:>7.0} kJ {:>7.0} kJ  {:<16} {:>7.1}% {:>8}",
             x.rank.unwrap_or(0),
             x.name,
@@ -120,14 +128,14 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
     }
     if let (Some(best), true) = (ranked.first(), models.len() > 1) {
         match sc.file.barrier_design.across_models {
-            talus::barrier::AcrossModels::Worst => println!(
+            talus::barrier::AcrossModels::Worst => say!(
                 "#1 over {} models: height set by {}, class by {}; worst share {:.1} %",
                 models.len(),
                 best.height_from,
                 best.energy_from,
                 100.0 * best.share
             ),
-            talus::barrier::AcrossModels::Pooled => println!(
+            talus::barrier::AcrossModels::Pooled => say!(
                 "#1 over {} models pooled: {} of the {} rocks of all runs that reach the zone intercepted ({:.1} %)",
                 models.len(),
                 best.intercepted,
@@ -137,12 +145,12 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
         }
     }
     if let Some(text) = floor_sentence(&study) {
-        println!("{text} ({})", a.out.join("floor").display());
+        say!("{text} ({})", a.out.join("floor").display());
     }
     for m in &study.models {
         let (Some(r), Some(b)) = (&m.residual, &study.barrier) else { continue };
         let of = if models.len() > 1 { format!(" under {}", m.name) } else { String::new() };
-        println!(
+        say!(
             "with {} ({} m, {} kJ){of}: rocks reaching the protected zone {} ({:.1} %) -> {} ({:.1} %); caught {}, through {}, over {}, around {}",
             b.name.as_deref().unwrap_or("the barrier"),
             b.height_m,
@@ -157,6 +165,6 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
             r.around
         );
     }
-    println!("wrote {}", a.out.join("index.html").display());
+    say!("wrote {}", a.out.join("index.html").display());
     Ok(())
 }

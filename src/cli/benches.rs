@@ -121,7 +121,7 @@ pub fn run(a: BenchesArgs) -> anyhow::Result<()> {
         pb.finish_and_clear();
     }
     for (t, m) in summary.timings.iter().zip(&summary.models) {
-        println!(
+        say!(
             "{}: {} rocks in {:.2} s ({:.0} rocks/s); {} counted, {} left by a side, {} stayed on the crest",
             t.model.label(),
             t.rocks,
@@ -132,7 +132,7 @@ pub fn run(a: BenchesArgs) -> anyhow::Result<()> {
             m.crest
         );
     }
-    println!(
+    say!(
         "first-bench capture at the Modified Ritchie width {:.1} m (Wilson 95 % interval):",
         summary.modified_ritchie_width_m
     );
@@ -143,11 +143,11 @@ pub fn run(a: BenchesArgs) -> anyhow::Result<()> {
             }
             _ => "outside the simulated widths".to_string(),
         };
-        println!("  {:>5}° {:<8} {v}", h.face_angle_deg, h.model);
+        say!("  {:>5}° {:<8} {v}", h.face_angle_deg, h.model);
     }
     for s in &summary.spread {
-        println!("{}", spread_statement(s));
+        say!("{}", spread_statement(s));
     }
-    println!("wrote {} files to {} (see report.md)", summary.outputs.len(), a.out.display());
+    say!("wrote {} files to {} (see report.md)", summary.outputs.len(), a.out.display());
     Ok(())
 }

@@ -104,25 +104,26 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     if let Some(k) = kfold {
         if cfg.outer_repeats > 1 {
             let r = calibrate::repeated_cross_validation(model.as_ref(), &cfg, k, &a.out, &log)?;
-            println!(
+            say!(
                 "outer {k}-fold cross-validation repeated with seeds {:?} in {:.0} s; held-out, mean ± sd:",
-                r.seeds, r.total_s
+                r.seeds,
+                r.total_s
             );
             for m in r.summary.iter().filter(|m| m.runs == "all") {
-                println!("  {} {:.2} ± {:.2}", m.metric, m.mean, m.sd);
+                say!("  {} {:.2} ± {:.2}", m.metric, m.mean, m.sd);
             }
             print_parameter_spread(&r.parameters);
             print_fold_maps(&r.model, &a.out, false);
-            println!("wrote {}", a.out.join("cv_repeats.md").display());
+            say!("wrote {}", a.out.join("cv_repeats.md").display());
             return Ok(());
         }
         let cv = calibrate::cross_validate(model.as_ref(), &cfg, k, &a.out, &log)?;
         let (b, f) = (&cv.baseline.overall, &cv.final_set.overall);
-        println!("outer {k}-fold cross-validation over {} runs in {:.0} s", b.runs, cv.total_s);
+        say!("outer {k}-fold cross-validation over {} runs in {:.0} s", b.runs, cv.total_s);
         print_errors("held-out", b, f);
         print_parameter_spread(&cv.parameters);
         print_fold_maps(&cv.model, &a.out, true);
-        println!("wrote {}", a.out.join("cv_report.md").display());
+        say!("wrote {}", a.out.join("cv_report.md").display());
         return Ok(());
     }
     let (cal, hold, note) = match held_out {
@@ -154,14 +155,14 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     }
     let c = calibrate::calibrate(model.as_ref(), &cfg, &cal, &hold, &note, Some(&a.out), &log)?;
     let r = &c.report;
-    println!(
+    say!(
         "{} calibration runs, {} held out; {} simulations in {:.0} s",
         cal.len(),
         hold.len(),
         r.timing.simulations,
         r.timing.total_s
     );
-    println!(
+    say!(
         "effects added: {}",
         if r.effects_added.is_empty() {
             "none".to_string()
@@ -187,14 +188,14 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     if let (Some(mb), Some(mf), Some(cb), Some(cf)) =
         (b.rebound_mae_m, f.rebound_mae_m, b.rebound_crps_m, f.rebound_crps_m)
     {
-        println!("{set} rebound_mae_m {mb:.3} -> {mf:.3} m, rebound_crps_m {cb:.3} -> {cf:.3} m (tracked runs)");
+        say!("{set} rebound_mae_m {mb:.3} -> {mf:.3} m, rebound_crps_m {cb:.3} -> {cf:.3} m (tracked runs)");
     }
-    println!("wrote {}", a.out.join("report.md").display());
+    say!("wrote {}", a.out.join("report.md").display());
     let (file, command) = match kind {
         ModelKind::Rigid3d => (calibrate::scenario_file::RUN_SCENARIO, "run"),
         ModelKind::Lumped2d => (calibrate::scenario_file::PROFILE_SCENARIO, "profile"),
     };
-    println!("the final model: talus {command} {} --out MAP", a.out.join(file).display());
+    say!("the final model: talus {command} {} --out MAP", a.out.join(file).display());
     Ok(())
 }
 
@@ -203,7 +204,7 @@ fn print_parameter_spread(spread: &[calibrate::crossval::ParameterSpread]) {
     let moving: Vec<String> =
         spread.iter().filter(|p| p.sd > 0.0).map(|p| format!("{} {:.3} ± {:.3}", p.name, p.mean, p.sd)).collect();
     if !moving.is_empty() {
-        println!("fitted across the folds, mean ± sd: {}", moving.join(", "));
+        say!("fitted across the folds, mean ± sd: {}", moving.join(", "));
     }
 }
 
@@ -211,9 +212,9 @@ fn print_parameter_spread(spread: &[calibrate::crossval::ParameterSpread]) {
 /// every repeat's).
 fn print_fold_maps(model: &str, out: &std::path::Path, per_fold: bool) {
     let models = out.join(calibrate::crossval::fold_models_glob(model, per_fold));
-    println!("the fold models side by side: talus envelope {} --floor --out DIR", models.display());
+    say!("the fold models side by side: talus envelope {} --floor --out DIR", models.display());
     if model != "2dlm" {
-        println!(
+        say!(
             "a barrier that holds under each: talus barrier SITE.toml --models {} --floor --out DIR",
             models.display()
         );
@@ -222,7 +223,7 @@ fn print_fold_maps(model: &str, out: &std::path::Path, per_fold: bool) {
 
 /// One line of `set`'s run-out errors, baseline `b` against final `f`.
 fn print_errors(set: &str, b: &Metrics, f: &Metrics) {
-    println!(
+    say!(
         "{set} runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m (if right ±{:.2}), runout_w1_m {:.2} -> {:.2} m (if right {:.2}), coverage_90 {:.2} -> {:.2} (if right {:.2})",
         b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, f.runout_bias_if_right_m, b.runout_w1_m, f.runout_w1_m, f.runout_w1_if_right_m, b.coverage_90, f.coverage_90, f.coverage_90_if_right
     );

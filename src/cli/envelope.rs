@@ -81,14 +81,14 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
     } else {
         "rocks as each scenario says".to_string()
     };
-    println!("{n} models, {rocks} with seed {}, in {:.1} s", summary.models[0].seed, summary.wall_time_s);
+    say!("{n} models, {rocks} with seed {}, in {:.1} s", summary.models[0].seed, summary.wall_time_s);
     for m in &summary.models {
-        println!(
+        say!(
             "  {}: run-out median {:.1} m (P95 {:.1} m); largest energy P95 {:.1} kJ; largest bounce P50 {:.2} m, P95 {:.2} m",
             m.name, m.runout_m.p50, m.runout_m.p95, m.max_kinetic_kj.p95, m.max_bounce_m.p50, m.max_bounce_m.p95
         );
     }
-    println!(
+    say!(
         "(max - min) / median over the models, in the median cell and at P95, over the cells at least {} rocks of \
          every model reach:",
         talus::envelope::WELL_SAMPLED_ROCKS
@@ -102,7 +102,7 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
                 pct(f.rasters[i].relative_spread_p95)
             )
         });
-        println!(
+        say!(
             "  {}: {} and {} ({} cells){floor}",
             r.raster,
             pct(r.relative_spread_p50),
@@ -130,16 +130,16 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
             pct(z.well_sampled_differing, z.well_sampled_zoned)
         )
     };
-    println!("hazard zones over the models: {}", zones(&summary.zones));
+    say!("hazard zones over the models: {}", zones(&summary.zones));
     if let Some(f) = &summary.floor {
-        println!("  seeds alone: {}", zones(&f.zones));
+        say!("  seeds alone: {}", zones(&f.zones));
     }
     for c in &summary.collectors {
         let floor = summary.floor.as_ref().and_then(|f| f.collectors.iter().find(|x| x.name == c.name));
         let seeds = floor.map_or(String::new(), |f| {
             format!(" (seeds alone {} m, {} kJ)", range(&f.passing_height_m_p95, 2), range(&f.kinetic_kj_p95, 1))
         });
-        println!(
+        say!(
             "collector {}: passing height P95 {} m, kinetic energy P95 {} kJ over the models{seeds}; fraction crossing {}",
             c.name,
             range(&c.passing_height_m_p95, 2),
@@ -147,12 +147,7 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
             range(&c.fraction_crossing, 3)
         );
     }
-    println!(
-        "wrote {} files to {}; read {}",
-        summary.outputs.len(),
-        a.out.display(),
-        a.out.join("envelope.md").display()
-    );
+    say!("wrote {} files to {}; read {}", summary.outputs.len(), a.out.display(), a.out.join("envelope.md").display());
     Ok(())
 }
 
@@ -191,9 +186,9 @@ fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
             .with_context(|| format!("combining {} profile models into {}", scenarios.len(), a.out.display()))
     })?;
     let f = talus::envelope::fmt_opt;
-    println!("{} profile models with seed {seed}, in {:.1} s", summary.models.len(), summary.wall_time_s);
+    say!("{} profile models with seed {seed}, in {:.1} s", summary.models.len(), summary.wall_time_s);
     for m in &summary.models {
-        println!(
+        say!(
             "  {}: {} rocks, run-out median {} m (P95 {} m); highest bounce P95 {} m, energy P95 {} kJ along the profile",
             m.name,
             m.rocks,
@@ -209,8 +204,8 @@ fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
             .as_ref()
             .and_then(|fl| fl.bench_fractions.get(1))
             .map_or(String::new(), |s| format!(" (seeds alone {}-{})", f(s.min, 3), f(s.max, 3)));
-        println!("first bench catches {}-{} of the rocks over the models{seeds}", f(b.min, 3), f(b.max, 3));
+        say!("first bench catches {}-{} of the rocks over the models{seeds}", f(b.min, 3), f(b.max, 3));
     }
-    println!("wrote envelopes.csv, collectors.csv and envelope.md to {}", a.out.display());
+    say!("wrote envelopes.csv, collectors.csv and envelope.md to {}", a.out.display());
     Ok(())
 }

@@ -74,11 +74,11 @@ pub fn run(a: MeshArgs) -> anyhow::Result<()> {
             }
             if b.two_d {
                 talus::terrain::bench::write_profile_csv(&g, &b.out)?;
-                println!("wrote the 2D profile of {} benches to {}", g.n_benches, b.out.display());
+                say!("wrote the 2D profile of {} benches to {}", g.n_benches, b.out.display());
             } else {
                 let mesh = g.mesh();
                 talus::io::obj::write_obj(&b.out, &mesh)?;
-                println!("wrote {} triangles ({} benches) to {}", mesh.triangles.len(), g.n_benches, b.out.display());
+                say!("wrote {} triangles ({} benches) to {}", mesh.triangles.len(), g.n_benches, b.out.display());
             }
             Ok(())
         }

@@ -1,5 +1,14 @@
 //! Command-line arguments (clap) and their dispatch. The library never sees clap types.
 
+/// `println!` that ignores a closed standard output (`talus run ... | head -2`): the run goes on and writes all its
+/// files instead of panicking on the broken pipe.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 mod barrier;
 mod benches;
 mod calibrate;

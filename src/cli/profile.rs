@@ -40,7 +40,7 @@ pub fn run(a: ProfileArgs) -> anyhow::Result<()> {
         run_profile(&scenario, &a.out).with_context(|| format!("running {}", a.scenario.display()))
     })?;
     let s = summary.stop_reasons;
-    println!(
+    say!(
         "{} rocks in {:.2} s ({:.0} rocks/s): {} stopped, {} left the profile, {} hit the event cap, {} the time cap",
         summary.rocks,
         summary.wall_time_s,
@@ -51,7 +51,7 @@ pub fn run(a: ProfileArgs) -> anyhow::Result<()> {
         s.max_time
     );
     let m = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v:.1}"));
-    println!(
+    say!(
         "run-out median {} m (P95 {} m, max {} m)",
         m(summary.runout_m.p50),
         m(summary.runout_m.p95),
@@ -62,8 +62,8 @@ pub fn run(a: ProfileArgs) -> anyhow::Result<()> {
             .map(|k| format!("bench {k} {:.0} %", 100.0 * c.fraction_per_bench[k]))
             .chain(std::iter::once(format!("past the last {:.0} %", 100.0 * c.fraction_per_bench[0])))
             .collect();
-        println!("captured: {}", per.join(", "));
+        say!("captured: {}", per.join(", "));
     }
-    println!("wrote {} files to {}", summary.outputs.len(), a.out.display());
+    say!("wrote {} files to {}", summary.outputs.len(), a.out.display());
     Ok(())
 }

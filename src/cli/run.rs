@@ -49,7 +49,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     let summary = run_scenario(&sc, &overrides, &a.out, &progress)
         .with_context(|| format!("running {}", a.scenario.display()))?;
     pb.finish_and_clear();
-    println!(
+    say!(
         "{} rocks in {:.1} s ({:.0} rocks/s): {} stopped, {} left the terrain, {} hit the time limit",
         summary.rocks,
         summary.wall_time_s,
@@ -58,15 +58,18 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         summary.stop_reasons.get("left_terrain").copied().unwrap_or(0),
         summary.stop_reasons.get("max_time").copied().unwrap_or(0)
     );
-    println!(
+    say!(
         "run-out median {:.1} m (P95 {:.1} m, max {:.1} m); largest kinetic energy P95 {:.1} kJ",
-        summary.runout_m.p50, summary.runout_m.p95, summary.runout_m.max, summary.max_kinetic_kj.p95
+        summary.runout_m.p50,
+        summary.runout_m.p95,
+        summary.runout_m.max,
+        summary.max_kinetic_kj.p95
     );
     for b in &summary.barriers {
-        println!("barrier {}: {} rocks caught, {} broke through", b.name, b.caught, b.broke_through);
+        say!("barrier {}: {} rocks caught, {} broke through", b.name, b.caught, b.broke_through);
     }
     for c in &summary.collectors {
-        println!(
+        say!(
             "collector {}: {} rocks crossed ({:.1} %), kinetic energy P95 {:.1} kJ, passing height P95 {:.2} m",
             c.name,
             c.rocks_crossing,
@@ -75,7 +78,7 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
             c.passing_height_m_p95.unwrap_or(f64::NAN)
         );
     }
-    println!(
+    say!(
         "wrote {} files to {}; open {} to see them",
         summary.outputs.len(),
         a.out.display(),

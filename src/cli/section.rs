@@ -79,7 +79,7 @@ pub fn run(a: SectionArgs) -> anyhow::Result<()> {
     }
     let mats: Vec<String> =
         profile.material_names().iter().zip(&counts).map(|(n, c)| format!("{n} ({c} segments)")).collect();
-    println!(
+    say!(
         "wrote a {:.1} m profile ({} vertices, z {:.1} to {:.1} m; {}) to {}",
         x1 - x0,
         profile.n_vertices(),

@@ -56,6 +56,9 @@ const UNIT_METRE: u16 = 9001;
 /// GeoKey value meaning "user-defined".
 const USER_DEFINED: u16 = 32767;
 
+/// The EPSG codes a GeoTIFF key can hold.
+pub const EPSG_CODES: std::ops::Range<u32> = 1..USER_DEFINED as u32;
+
 /// Reads the first band of a GeoTIFF DEM.
 ///
 /// Nodata (GDAL_NODATA) and non-finite values become `NaN`. See the module documentation for what is supported.
