@@ -494,7 +494,7 @@ fn the_same_model_twice_has_no_spread_and_models_of_two_frames_are_refused() {
         assert!(lo.values.iter().zip(&hi.values).all(|(x, y)| x == y || (x.is_nan() && y.is_nan())), "{stem}");
     }
 
-    // Another cell size: refused at the second model, naming it and the key to align.
+    // Another cell size: refused before any model runs, naming the second model and the key to align.
     std::fs::write(&sb, std::fs::read_to_string(&sb).unwrap().replace("cell_size_m = 4.0", "cell_size_m = 2.0"))
         .unwrap();
     let bad = dir.path().join("bad");
@@ -502,7 +502,7 @@ fn the_same_model_twice_has_no_spread_and_models_of_two_frames_are_refused() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("b: rasters") && err.contains("cell_size_m") && err.contains("how to fix"), "{err}");
-    assert!(!bad.join("envelope.json").exists() && !bad.join("reach_probability_max.tif").exists());
+    assert!(!bad.join("models").exists(), "a model ran before the refusal");
     // One model is not an envelope.
     let o = envelope(&[&sa], &bad, &[]);
     let err = String::from_utf8_lossy(&o.stderr);

@@ -7,12 +7,13 @@ pub mod profile;
 
 use crate::collector::facts::CollectorFacts;
 use crate::error::{Error, Result};
+use crate::hazard::grid::RasterFrame;
 use crate::raster::Grid;
 use crate::report::maps;
 use crate::run::{quantile_sorted, run_scenario_with, RunExtras, RunOverrides, Stats, RASTERS};
 use crate::scenario::{Scenario, ScenarioFile};
 use serde::Serialize;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// The statistics over models written for each raster (file-name suffixes): the lowest, median and highest value
@@ -225,6 +226,35 @@ pub fn check_frame(a: &Grid, name_a: &str, b: &Grid, name_b: &str) -> Result<()>
     ))
 }
 
+/// Refuses, before anything runs, a model whose rasters would not cover the first model's cells ([`check_frame`]
+/// after the runs would find it only when every model has run). A model with the first's terrain files, terrain
+/// settings and cell size covers its cells without loading the terrain again.
+fn check_frames_before(models: &[(Scenario, String)]) -> Result<()> {
+    let key = |sc: &Scenario| {
+        let files: Vec<PathBuf> =
+            sc.terrain_files.iter().map(|p| p.canonicalize().unwrap_or_else(|_| p.clone())).collect();
+        let mut terrain = sc.file.terrain.clone();
+        terrain.files.clear();
+        (files, serde_json::to_string(&terrain).unwrap_or_default(), sc.file.output.cell_size_m.to_bits())
+    };
+    let frame = |sc: &Scenario| -> Result<Grid> {
+        Ok(RasterFrame::covering(&crate::run::load_terrain(sc)?, sc.file.output.cell_size_m).empty_grid())
+    };
+    let (first, first_name) = &models[0];
+    let first_key = key(first);
+    let mut first_frame = None;
+    for (sc, name) in &models[1..] {
+        if key(sc) != first_key {
+            let a = match &first_frame {
+                Some(a) => a,
+                None => first_frame.insert(frame(first)?),
+            };
+            check_frame(a, first_name, &frame(sc)?, name)?;
+        }
+    }
+    Ok(())
+}
+
 /// The lowest, median and highest value in each cell over `grids` (one per model, named by `names`), counting
 /// only the models with a value there (`NaN` is no value: no rock passed, or outside the terrain).
 pub fn combine(grids: &[Grid], names: &[String]) -> Result<[Grid; 3]> {
@@ -288,6 +318,7 @@ pub fn run_envelope(
             "give two or more scenario files, e.g. every fold_*/calibrated.toml of `talus calibrate --kfold`",
         ));
     }
+    check_frames_before(models)?;
     let seed = overrides.seed.unwrap_or(models[0].0.file.simulation.seed);
     let runs: Vec<Member> =
         models.iter().map(|(scenario, name)| Member { scenario, name: name.clone(), seed }).collect();

@@ -203,7 +203,9 @@ fn profile_envelope_of(members: &[(&ProfileScenario, String, u64)], out_dir: &Pa
         });
     }
     let names: Vec<String> = members.iter().map(|m| m.1.clone()).collect();
-    // Keys: the station (x and the ground there), and for collectors their number too.
+    // Keys: the station (x and the ground there), and for collectors their number too. Both tables are combined
+    // before either is written, so that models whose collectors differ leave no envelope behind.
+    let mut combined_tables = Vec::new();
     for (file, keys) in [("envelopes.csv", 2), ("collectors.csv", 3)] {
         let tables = names
             .iter()
@@ -215,7 +217,9 @@ fn profile_envelope_of(members: &[(&ProfileScenario, String, u64)], out_dir: &Pa
                 m.highest_kinetic_p95_kj = t.column_max("kinetic_p95_j").map(|j| j / 1000.0);
             }
         }
-        let combined = combine_tables(&tables, &names, keys)?;
+        combined_tables.push((file, combine_tables(&tables, &names, keys)?));
+    }
+    for (file, combined) in combined_tables {
         let path = out_dir.join(file);
         crate::io::write_atomic(&path, |w| {
             for line in std::iter::once(&combined.header).chain(&combined.rows) {
