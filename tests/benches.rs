@@ -166,6 +166,18 @@ fn outputs_have_the_specified_columns_and_add_up() {
         summary.first_bench_at_modified_ritchie.iter().filter(|h| h.model != "records").collect();
     assert_eq!(h.len(), 4);
     assert!(h.iter().all(|h| h.interpolated_between_m == Some([7.0, 10.0])));
+    // Its interval spans both widths' Wilson intervals (capture grows with the width), from capture.csv.
+    for p in &h {
+        let ci = |w: &str| {
+            let row = rows.iter().find(|r| {
+                r[0] == p.model && r[1].parse::<f64>().unwrap() == p.face_angle_deg && r[2] == w && r[3] == "1"
+            });
+            let r = row.unwrap();
+            (r[6].parse::<f64>().unwrap(), r[7].parse::<f64>().unwrap())
+        };
+        let (lo, hi) = (ci("7").0.min(ci("10").0), ci("7").1.max(ci("10").1));
+        assert!((p.ci_low.unwrap() - lo).abs() < 1e-6 && (p.ci_high.unwrap() - hi).abs() < 1e-6, "{p:?}");
+    }
     let json: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.path().join("summary.json")).unwrap()).unwrap();
     assert_eq!(json["config"]["lumped2d"]["runs"], 60);

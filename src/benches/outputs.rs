@@ -35,9 +35,11 @@ pub struct HeadlinePoint {
     pub model: String,
     /// Captured fraction (`None` when the width is outside the simulated widths).
     pub captured_fraction: Option<f64>,
-    /// Wilson 95 % interval, low end (interpolated like the fraction).
+    /// Wilson 95 % interval, low end; between two simulated widths the lower of their two low ends (capture grows
+    /// with the width, so the value lies between theirs; an interpolated interval can be far too narrow where
+    /// capture jumps between the widths).
     pub ci_low: Option<f64>,
-    /// Wilson 95 % interval, high end.
+    /// Wilson 95 % interval, high end; between two simulated widths the higher of their two high ends.
     pub ci_high: Option<f64>,
     /// The simulated widths it was interpolated between, m (equal when simulated at that width).
     pub interpolated_between_m: Option<[f64; 2]>,
@@ -292,14 +294,17 @@ pub fn write_outputs(result: &StudyResult, records: Option<&[HistoricRecord]>, o
                     pts.push((conf.bench_width_m, per_bench[1] as f64 / n as f64, lo, hi));
                 }
             }
-            let col = |k: usize| pts.iter().map(|p| (p.0, [p.1, p.2, p.3][k])).collect::<Vec<_>>();
-            let v = interpolate(&col(0), mr);
+            let v = interpolate(&pts.iter().map(|p| (p.0, p.1)).collect::<Vec<_>>(), mr);
+            // Capture grows with the width (every width sees the same rocks), so between two simulated widths it
+            // lies between theirs: the interval spans both widths' intervals.
+            let at = |w: f64| pts.iter().find(|p| p.0 == w).map_or((f64::NAN, f64::NAN), |p| (p.2, p.3));
+            let ci = v.map(|(_, [a, b])| (at(a).0.min(at(b).0), at(a).1.max(at(b).1)));
             headline.push(HeadlinePoint {
                 face_angle_deg: angle,
                 model: model.label().to_string(),
                 captured_fraction: v.map(|v| v.0),
-                ci_low: interpolate(&col(1), mr).map(|v| v.0),
-                ci_high: interpolate(&col(2), mr).map(|v| v.0),
+                ci_low: ci.map(|c| c.0),
+                ci_high: ci.map(|c| c.1),
                 interpolated_between_m: v.map(|v| v.1),
                 meets_target: v.map(|v| v.0 >= cfg.retention_target),
             });
@@ -514,7 +519,8 @@ fn report(result: &StudyResult, s: &StudySummary) -> String {
     };
     let _ = writeln!(
         r,
-        "BW = 0.2 × {} + 4.5 = {} m; {how}. Wilson 95 % intervals in brackets (interpolated likewise). Design target: \
+        "BW = 0.2 × {} + 4.5 = {} m; {how}. Wilson 95 % intervals in brackets (between two widths, from the lower \
+         end of both to the higher end of both: capture grows with the width). Design target: \
          {} of rocks on the first bench.\n",
         short(c.bench_height_m),
         short(mr),

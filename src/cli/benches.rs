@@ -133,7 +133,7 @@ pub fn run(a: BenchesArgs) -> anyhow::Result<()> {
         );
     }
     say!(
-        "first-bench capture at the Modified Ritchie width {:.1} m (Wilson 95 % interval):",
+        "first-bench capture at the Modified Ritchie width {:.1} m (Wilson 95 % interval; between two simulated widths it spans both):",
         summary.modified_ritchie_width_m
     );
     for h in &summary.first_bench_at_modified_ritchie {
