@@ -360,7 +360,9 @@ impl StudyConfig {
         positive("geometry.lateral_width_m", g.lateral_width_m, "e.g. 200")?;
         positive("geometry.max_edge_m", g.max_edge_m, "e.g. 2.5")?;
         for &a in &self.face_angles_deg {
-            self.geometry(a, self.bench_widths_m[0]).validate("geometry.")?;
+            for &w in &self.bench_widths_m {
+                self.geometry(a, w).validate("geometry.")?;
+            }
         }
         let r = &self.release;
         non_negative("release.setback_m", r.setback_m, "e.g. 0")?;

@@ -68,7 +68,7 @@ pub fn run(a: MeshArgs) -> anyhow::Result<()> {
                 lateral_width_m: b.lateral_width_m,
                 max_edge_m: b.max_edge_m,
             };
-            g.validate("")?;
+            g.validate("").map_err(as_flags)?;
             if let Some(dir) = b.out.parent().filter(|d| !d.as_os_str().is_empty()) {
                 std::fs::create_dir_all(dir)?;
             }
@@ -82,5 +82,19 @@ pub fn run(a: MeshArgs) -> anyhow::Result<()> {
             }
             Ok(())
         }
+    }
+}
+
+/// A [`BenchGeometry::validate`] error with its key (e.g. `max_edge_m`) named as the flag (`--max-edge-m`).
+fn as_flags(e: talus::error::Error) -> talus::error::Error {
+    match e {
+        talus::error::Error::Invalid { field, message, hint } => {
+            let flag = match field.as_str() {
+                "n_benches" => "--benches".to_string(),
+                key => format!("--{}", key.replace('_', "-")),
+            };
+            talus::error::Error::invalid(flag, message, hint)
+        }
+        other => other,
     }
 }
