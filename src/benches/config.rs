@@ -338,6 +338,7 @@ impl StudyConfig {
             }
         };
         positive("bench_height_m", self.bench_height_m, "e.g. bench_height_m = 20")?;
+        crate::parallel::check_threads("threads", self.threads)?;
         if self.n_benches == 0 {
             return Err(Error::invalid("n_benches", "must be at least 1", "e.g. n_benches = 5"));
         }

@@ -21,21 +21,18 @@ pub struct RunControl {
     /// Seed of all random draws (overrides the scenario).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Threads (default: all cores). Results do not depend on it.
+    /// Threads, 1 to 1024 (default: all cores). Results do not depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
 }
 
 impl RunControl {
-    /// Refuses zero rocks or threads.
+    /// Refuses zero rocks, and zero or too many threads.
     pub fn check(&self) -> anyhow::Result<()> {
         if self.rocks == Some(0) {
             anyhow::bail!("--rocks: must be at least 1");
         }
-        if self.threads == Some(0) {
-            anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)");
-        }
-        Ok(())
+        check_threads_flag(self.threads)
     }
 
     /// The overrides of a 3D run, with the paths of the first `paths` rocks.
@@ -64,6 +61,15 @@ pub fn load_models(
         models.push((name, scenario));
     }
     Ok(models)
+}
+
+/// Refuses `--threads 0` and more than [`talus::parallel::MAX_THREADS`].
+pub fn check_threads_flag(threads: Option<usize>) -> anyhow::Result<()> {
+    match threads {
+        Some(0) => anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)"),
+        Some(n) => Ok(talus::parallel::check_threads("--threads", n)?),
+        None => Ok(()),
+    }
 }
 
 /// Runs `go` on `threads` threads (all cores when `None`) for the 2DLM commands, whose engine uses rayon's pool.
