@@ -81,3 +81,26 @@ impl Error {
         Error::Invalid { field: field.into(), message: message.into(), hint: hint.into() }
     }
 }
+
+/// `v` as error messages show it: with at most 6 decimals between 0.001 and a million, otherwise in scientific
+/// notation with 3 significant digits (so that 1e308 does not take 309 digits).
+pub fn number_text(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        format!("{v}")
+    } else if (1e-3..1e6).contains(&v.abs()) {
+        let text = format!("{v:.6}");
+        text.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
+/// `v` (positive) rounded up to 3 significant digits: a least allowed value that a message can show and that is
+/// still allowed as shown.
+pub fn round_up_3_digits(v: f64) -> f64 {
+    if !(v.is_finite() && v > 0.0) {
+        return v;
+    }
+    let unit = 10f64.powi(v.log10().floor() as i32 - 2);
+    (v / unit).ceil() * unit
+}

@@ -2,6 +2,25 @@
 //! chunks, and handed to the consumer strictly in index order. Results therefore never depend on the number of
 //! threads, and memory holds one chunk of results at a time, not all of them.
 
+use crate::error::{Error, Result};
+
+/// Most threads a run may ask for. Ours: 1024 is more cores than any one machine talus runs on has, while a
+/// typo such as 100000 would spend minutes starting threads that then fight over the cores.
+pub const MAX_THREADS: usize = 1024;
+
+/// Refuses a thread count (named `field`, e.g. `--threads` or `scenario.toml: simulation.threads`) above
+/// [`MAX_THREADS`]; 0 (all cores) is for the caller to allow or not.
+pub fn check_threads(field: &str, threads: usize) -> Result<()> {
+    if threads <= MAX_THREADS {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        field,
+        format!("{threads} threads is more than the limit of {MAX_THREADS}"),
+        "give at most the number of cores, or leave it out to use all cores",
+    ))
+}
+
 /// Computes `f(i)` for `i` in `0..n` on `threads` threads (0 = all cores) and passes each result to `consume` in
 /// increasing `i`. Chunks of `chunk` items are computed at a time.
 pub fn map_in_order<T, F, C>(n: usize, threads: usize, chunk: usize, f: F, mut consume: C)

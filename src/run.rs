@@ -264,13 +264,13 @@ pub fn run_scenario_with(
     collector_lines.extend(extras.collectors.iter().cloned());
     let collectors = crate::collector::CollectorSet::new(collector_lines, extras.zone.clone());
     let mut collector_stats = crate::collector::CollectorStats::new(&collectors, setup.terrain.barriers.len());
+    let cell = sc.file.output.cell_size_m;
+    let frame = RasterFrame::covering(&setup.terrain, cell, &format!("{}: output.cell_size_m", sc.path.display()))?;
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
     let n = setup.rock_count();
     let threads = overrides.threads.or(sc.file.simulation.threads).unwrap_or(0);
     let n_paths = overrides.paths.unwrap_or(sc.file.output.paths).min(n);
-    let cell = sc.file.output.cell_size_m;
     let bandwidth = sc.file.output.endpoint_bandwidth_m.unwrap_or(2.0 * cell);
-    let frame = RasterFrame::covering(&setup.terrain, cell);
     let mut acc = HazardAccumulator::new(frame);
     let terrain = &setup.terrain;
 

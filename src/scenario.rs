@@ -510,6 +510,7 @@ impl ScenarioFile {
                 "give at least 1 thread, or leave it out to use all cores",
             ));
         }
+        crate::parallel::check_threads(&f("simulation.threads"), this.simulation.threads.unwrap_or(0))?;
         if !(this.output.cell_size_m.is_finite() && this.output.cell_size_m > 0.0) {
             return Err(Error::invalid(
                 f("output.cell_size_m"),

@@ -12,6 +12,11 @@ use crate::terrain::Terrain;
 use crate::terrain::{horizontal_to_local, point_in_polygon};
 use nalgebra::Vector3;
 
+/// Most rocks of a 3D run. Ours: a run keeps about 48 bytes per rock until its end (run-out, time, energy and
+/// bounce for the percentiles, and the stopping point for the end-point density), so 10⁷ rocks hold about 0.5 GB,
+/// and take hours at a few thousand rocks a second: ten times the largest ensembles hazard maps use.
+pub const MAX_ROCKS: usize = 10_000_000;
+
 #[derive(Debug, Clone)]
 enum Geometry {
     Point([f64; 2]),
@@ -185,6 +190,8 @@ impl Sources {
                 spec: spec.clone(),
             });
         }
+        let n = total.unwrap_or_else(|| sources.iter().fold(0usize, |sum, s| sum.saturating_add(s.count)));
+        check_rock_count(field, n)?;
         if let Some(n) = total {
             rescale(&mut sources, n);
         }
@@ -286,11 +293,24 @@ impl Source {
     }
 }
 
+/// Refuses more than [`MAX_ROCKS`] rocks in all; `field` locates the sources.
+fn check_rock_count(field: &str, n: usize) -> Result<()> {
+    if n <= MAX_ROCKS {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        field,
+        format!("{n} rocks in all is more than the limit of {MAX_ROCKS} rocks a run"),
+        "give fewer rocks (--rocks, simulation.rocks, or the sources' count or density_per_m2), or split the \
+         ensemble into runs with different seeds (--seed)",
+    ))
+}
+
 /// Largest-remainder rescaling of source counts to `n` rocks in all (proportional to the counts as given).
 fn rescale(sources: &mut [Source], n: usize) {
-    let given: usize = sources.iter().map(|s| s.count).sum();
+    let given = sources.iter().any(|s| s.count > 0);
     let weights: Vec<f64> =
-        if given == 0 { vec![1.0; sources.len()] } else { sources.iter().map(|s| s.count as f64).collect() };
+        if !given { vec![1.0; sources.len()] } else { sources.iter().map(|s| s.count as f64).collect() };
     let wsum: f64 = weights.iter().sum();
     let exact: Vec<f64> = weights.iter().map(|w| w / wsum * n as f64).collect();
     let mut counts: Vec<usize> = exact.iter().map(|e| e.floor() as usize).collect();

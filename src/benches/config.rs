@@ -338,6 +338,7 @@ impl StudyConfig {
             }
         };
         positive("bench_height_m", self.bench_height_m, "e.g. bench_height_m = 20")?;
+        crate::parallel::check_threads("threads", self.threads)?;
         if self.n_benches == 0 {
             return Err(Error::invalid("n_benches", "must be at least 1", "e.g. n_benches = 5"));
         }
@@ -360,7 +361,9 @@ impl StudyConfig {
         positive("geometry.lateral_width_m", g.lateral_width_m, "e.g. 200")?;
         positive("geometry.max_edge_m", g.max_edge_m, "e.g. 2.5")?;
         for &a in &self.face_angles_deg {
-            self.geometry(a, self.bench_widths_m[0]).validate("geometry.")?;
+            for &w in &self.bench_widths_m {
+                self.geometry(a, w).validate("geometry.")?;
+            }
         }
         let r = &self.release;
         non_negative("release.setback_m", r.setback_m, "e.g. 0")?;

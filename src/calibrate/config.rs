@@ -497,6 +497,7 @@ impl CalibrationConfig {
     /// Checks ranges; `source` prefixes field names.
     pub fn validate(&self, source: &str) -> Result<()> {
         let f = |name: &str| format!("{source}: {name}");
+        crate::parallel::check_threads(&f("threads"), self.threads)?;
         if self.repeats < 3 {
             return Err(Error::invalid(
                 f("repeats"),

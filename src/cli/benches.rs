@@ -59,15 +59,13 @@ pub struct BenchesArgs {
     /// Historic records CSV (bench_height_m,bench_width_m,face_angle_deg,runout_m).
     #[arg(long)]
     records: Option<PathBuf>,
-    /// Threads (default: all cores). Results do not depend on it.
+    /// Threads, 1 to 1024 (default: all cores). Results do not depend on it.
     #[arg(long)]
     threads: Option<usize>,
 }
 
 pub fn run(a: BenchesArgs) -> anyhow::Result<()> {
-    if a.threads == Some(0) {
-        anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)");
-    }
+    super::check_threads_flag(a.threads)?;
     let mut c = match &a.config {
         Some(p) => StudyConfig::load(p)?,
         None => StudyConfig::default(),

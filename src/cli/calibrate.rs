@@ -48,7 +48,7 @@ pub struct CalibrateArgs {
     /// loop's screening (overrides the settings; default 20).
     #[arg(long)]
     repeats: Option<usize>,
-    /// Threads (default: all cores). Results do not depend on it.
+    /// Threads, 1 to 1024 (default: all cores). Results do not depend on it.
     #[arg(long)]
     threads: Option<usize>,
     /// Outer k-fold cross-validation over all runs (K folds; `--kfold` alone uses outer_folds from the settings).
@@ -60,6 +60,7 @@ pub struct CalibrateArgs {
 }
 
 pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
+    super::check_threads_flag(a.threads)?;
     let kind = ModelKind::parse(&a.model)?;
     let (mut cfg, source) = match &a.config {
         Some(p) => (CalibrationConfig::read(p)?, p.display().to_string()),
@@ -75,9 +76,6 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         cfg.outer_repeats = r;
     }
     if let Some(t) = a.threads {
-        if t == 0 {
-            anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)");
-        }
         cfg.threads = t;
     }
     cfg.validate(&source)?;

@@ -23,7 +23,7 @@ enum MeshKind {
 
 #[derive(Debug, Args)]
 struct BenchArgs {
-    /// Output file (.obj, or .csv with --2d).
+    /// Output file: .obj, or .csv with --2d (other extensions are refused).
     #[arg(long)]
     out: PathBuf,
     /// Write the 2D profile (x_m,z_m,material) instead of the 3D mesh.
@@ -68,7 +68,8 @@ pub fn run(a: MeshArgs) -> anyhow::Result<()> {
                 lateral_width_m: b.lateral_width_m,
                 max_edge_m: b.max_edge_m,
             };
-            g.validate("")?;
+            super::check_out_file("--out", &b.out, Some(if b.two_d { "csv" } else { "obj" }), &[])?;
+            g.validate("").map_err(as_flags)?;
             if let Some(dir) = b.out.parent().filter(|d| !d.as_os_str().is_empty()) {
                 std::fs::create_dir_all(dir)?;
             }
@@ -82,5 +83,19 @@ pub fn run(a: MeshArgs) -> anyhow::Result<()> {
             }
             Ok(())
         }
+    }
+}
+
+/// A [`BenchGeometry::validate`] error with its key (e.g. `max_edge_m`) named as the flag (`--max-edge-m`).
+fn as_flags(e: talus::error::Error) -> talus::error::Error {
+    match e {
+        talus::error::Error::Invalid { field, message, hint } => {
+            let flag = match field.as_str() {
+                "n_benches" => "--benches".to_string(),
+                key => format!("--{}", key.replace('_', "-")),
+            };
+            talus::error::Error::invalid(flag, message, hint)
+        }
+        other => other,
     }
 }

@@ -30,21 +30,18 @@ pub struct RunControl {
     /// Seed of all random draws (overrides the scenario).
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Threads (default: all cores). Results do not depend on it.
+    /// Threads, 1 to 1024 (default: all cores). Results do not depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
 }
 
 impl RunControl {
-    /// Refuses zero rocks or threads.
+    /// Refuses zero rocks, and zero or too many threads.
     pub fn check(&self) -> anyhow::Result<()> {
         if self.rocks == Some(0) {
             anyhow::bail!("--rocks: must be at least 1");
         }
-        if self.threads == Some(0) {
-            anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)");
-        }
-        Ok(())
+        check_threads_flag(self.threads)
     }
 
     /// The overrides of a 3D run, with the paths of the first `paths` rocks.
@@ -73,6 +70,67 @@ pub fn load_models(
         models.push((name, scenario));
     }
     Ok(models)
+}
+
+/// Refuses `--threads 0` and more than [`talus::parallel::MAX_THREADS`].
+pub fn check_threads_flag(threads: Option<usize>) -> anyhow::Result<()> {
+    match threads {
+        Some(0) => anyhow::bail!("--threads: must be at least 1 (leave it out to use all cores)"),
+        Some(n) => Ok(talus::parallel::check_threads("--threads", n)?),
+        None => Ok(()),
+    }
+}
+
+/// Refuses an output file path (`flag`, e.g. `--out`) that is an existing folder, one of `inputs` (the same file
+/// by canonical path, so that a command never overwrites what it reads), or, if `extension` is given, whose
+/// extension is not that of the file written. Checked before any work.
+pub fn check_out_file(
+    flag: &str,
+    out: &std::path::Path,
+    extension: Option<&str>,
+    inputs: &[&std::path::Path],
+) -> anyhow::Result<()> {
+    refuse_folder(flag, out)?;
+    refuse_input(flag, out, inputs)?;
+    extension.map_or(Ok(()), |e| require_extension(flag, out, e))
+}
+
+/// Refuses `out` if it is an existing folder.
+fn refuse_folder(flag: &str, out: &std::path::Path) -> anyhow::Result<()> {
+    if out.is_dir() {
+        anyhow::bail!(
+            "{flag}: {} is a folder\n  how to fix: {flag} must be a file path, not a folder: name a file in it",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// Refuses `out` if it is the same file as one of `inputs`.
+fn refuse_input(flag: &str, out: &std::path::Path, inputs: &[&std::path::Path]) -> anyhow::Result<()> {
+    let Ok(out_canonical) = std::fs::canonicalize(out) else {
+        return Ok(()); // Not there yet: it cannot be an input.
+    };
+    if inputs.iter().any(|i| std::fs::canonicalize(i).is_ok_and(|c| c == out_canonical)) {
+        anyhow::bail!(
+            "{flag}: {} is an input file of this command and would be overwritten\n  how to fix: write to another file",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// Refuses `out` unless its extension is `extension` (any case).
+fn require_extension(flag: &str, out: &std::path::Path, extension: &str) -> anyhow::Result<()> {
+    let given = out.extension().map(|e| e.to_string_lossy().to_lowercase());
+    if given.as_deref() != Some(extension) {
+        anyhow::bail!(
+            "{flag}: {} does not end in .{extension}, but a .{extension} file is written\n  how to fix: name the file {}",
+            out.display(),
+            out.with_extension(extension).display()
+        );
+    }
+    Ok(())
 }
 
 /// Runs `go` on `threads` threads (all cores when `None`) for the 2DLM commands, whose engine uses rayon's pool.

@@ -47,6 +47,7 @@ enum Up {
 }
 
 pub fn run(a: SectionArgs) -> anyhow::Result<()> {
+    super::check_out_file("--out", &a.out, None, &[&a.terrain])?;
     if a.line.len() < 4 || !a.line.len().is_multiple_of(2) {
         anyhow::bail!(
             "--line: give an even number of coordinates, at least two points (x1,y1,x2,y2), got {} numbers",
@@ -55,7 +56,6 @@ pub fn run(a: SectionArgs) -> anyhow::Result<()> {
     }
     let line: Vec<[f64; 2]> = a.line.chunks(2).map(|c| [c[0], c[1]]).collect();
     let materials = match a.material {
-        Some(name) if name.trim().is_empty() => anyhow::bail!("--material: give a non-empty name"),
         Some(name) => SectionMaterials::Single(name),
         None => SectionMaterials::BySlope { face_slope_deg: a.face_slope_deg },
     };

@@ -1,8 +1,15 @@
 //! The raster frame of a run's hazard maps: a north-up grid over the terrain's horizontal extent, in the terrain's
 //! own coordinates, with cell edges on multiples of the cell size.
 
+use crate::error::{number_text, round_up_3_digits, Error, Result};
 use crate::raster::Grid;
 use crate::terrain::Terrain;
+
+/// Most cells of a run's raster frame. Ours: 10⁸ cells is a 10 km × 10 km site at 1 m, finer than the terrain
+/// models a run is usually given, and the frame's per-cell arrays (the accumulator's 16 bytes, six f32 rasters
+/// and the f64 end-point density: about 50 bytes a cell) then stay near 5 GB. Beyond it a cell size typo (1e-4
+/// for 1) would allocate terabytes.
+pub const MAX_RASTER_CELLS: usize = 100_000_000;
 
 /// Geometry of the hazard rasters, and the mapping from local-frame positions to cells.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -21,23 +28,65 @@ pub struct RasterFrame {
     pub origin_xy: [f64; 2],
 }
 
+/// Columns and rows (as f64, so that any cell size can be counted without overflow) of the frame with cell edges
+/// on multiples of `cell_m` covering `extent` = [x_min, y_min, x_max, y_max].
+fn cell_counts(extent: [f64; 4], cell_m: f64) -> [f64; 2] {
+    let count = |lo: f64, hi: f64| {
+        let (lo, hi) = ((lo / cell_m).floor() * cell_m, (hi / cell_m).ceil() * cell_m);
+        ((hi - lo) / cell_m).round().max(1.0)
+    };
+    [count(extent[0], extent[2]), count(extent[1], extent[3])]
+}
+
+/// The smallest cell size (rounded up to 3 significant digits) whose frame over `extent` has at most
+/// [`MAX_RASTER_CELLS`] cells.
+fn smallest_cell_m(extent: [f64; 4]) -> f64 {
+    let area_m2 = (extent[2] - extent[0]) * (extent[3] - extent[1]);
+    let mut cell_m = round_up_3_digits((area_m2 / MAX_RASTER_CELLS as f64).sqrt().max(1e-9));
+    // Snapping the edges to whole cells adds up to a row and a column: grow by 1 % until it fits.
+    while {
+        let c = cell_counts(extent, cell_m);
+        c[0] * c[1] > MAX_RASTER_CELLS as f64
+    } {
+        cell_m = round_up_3_digits(cell_m * 1.01);
+    }
+    cell_m
+}
+
 impl RasterFrame {
     /// The frame covering `terrain` with cells of `cell_m`.
-    pub fn covering(terrain: &Terrain, cell_m: f64) -> RasterFrame {
+    ///
+    /// # Errors
+    /// More than [`MAX_RASTER_CELLS`] cells: the error names `field` (the cell size key), the terrain's extent,
+    /// the cell count and the smallest cell size allowed.
+    pub fn covering(terrain: &Terrain, cell_m: f64, field: &str) -> Result<RasterFrame> {
         let (x0, y0, x1, y1) = terrain.surface.bounds_xy();
         let o = [terrain.origin.x, terrain.origin.y];
-        let x_min = ((x0 + o[0]) / cell_m).floor() * cell_m;
-        let y_min = ((y0 + o[1]) / cell_m).floor() * cell_m;
-        let x_max = ((x1 + o[0]) / cell_m).ceil() * cell_m;
-        let y_max = ((y1 + o[1]) / cell_m).ceil() * cell_m;
-        RasterFrame {
-            ncols: (((x_max - x_min) / cell_m).round() as usize).max(1),
-            nrows: (((y_max - y_min) / cell_m).round() as usize).max(1),
+        let extent = [x0 + o[0], y0 + o[1], x1 + o[0], y1 + o[1]];
+        let cells = cell_counts(extent, cell_m);
+        if cells[0] * cells[1] > MAX_RASTER_CELLS as f64 {
+            let (width, height) = (extent[2] - extent[0], extent[3] - extent[1]);
+            return Err(Error::invalid(
+                field,
+                format!(
+                    "{} m cells over the terrain's {width:.1} m × {height:.1} m would make {} raster cells, more \
+                     than the limit of {MAX_RASTER_CELLS}",
+                    number_text(cell_m),
+                    number_text(cells[0] * cells[1])
+                ),
+                format!("use cells of at least {} m", number_text(smallest_cell_m(extent))),
+            ));
+        }
+        let x_min = (extent[0] / cell_m).floor() * cell_m;
+        let y_max = (extent[3] / cell_m).ceil() * cell_m;
+        Ok(RasterFrame {
+            ncols: cells[0] as usize,
+            nrows: cells[1] as usize,
             cell_m,
             x_min_m: x_min,
             y_max_m: y_max,
             origin_xy: o,
-        }
+        })
     }
 
     /// Number of cells.

@@ -5,8 +5,8 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-/// Writes `path` by calling `fill` on a buffered writer to `path.tmp`, then renaming. On error the temporary file
-/// is removed and `path` is untouched.
+/// Writes `path` by calling `fill` on a buffered writer to `path.tmp`, then renaming. On any error (also when the
+/// final rename fails, e.g. because `path` is a folder) the temporary file is removed and `path` is untouched.
 pub fn write_atomic<F>(path: &Path, fill: F) -> Result<()>
 where
     F: FnOnce(&mut BufWriter<File>) -> Result<()>,
@@ -18,15 +18,13 @@ where
         fill(&mut w)?;
         w.flush().map_err(|e| Error::io(&tmp, e))?;
         w.get_ref().sync_all().map_err(|e| Error::io(&tmp, e))?;
-        Ok(())
+        drop(w);
+        std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
     })();
-    match result {
-        Ok(()) => std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e)),
-        Err(e) => {
-            let _ = std::fs::remove_file(&tmp);
-            Err(e)
-        }
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
     }
+    result
 }
 
 /// Writes `bytes` to `path` atomically.

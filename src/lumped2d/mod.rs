@@ -58,7 +58,7 @@ pub use gauges::{Crossing, GaugeEnsemble, GaugeLayout, GaugeRecorder, GaugeStats
 pub use material::{tan_friction_from_rt, DistSpec, FrictionAngle, FrictionMode, Material2d, MaterialSpec};
 pub use options::{FrictionSource, Options2d, Rotation};
 pub use path::{FlightPiece, ImpactEvent, PathObserver, PathPiece, PathRecorder, SlidePiece};
-pub use profile::Profile;
+pub use profile::{Profile, MAX_STATIONS};
 pub use release::{Release2d, ValueRange};
 pub use run::{
     run_profile, simulate_bench, simulate_ensemble_rock, simulate_rocks, BenchCapture, BenchCaptureSummary, BenchRun,

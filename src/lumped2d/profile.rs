@@ -20,6 +20,28 @@ use crate::terrain::bench::{BenchGeometry, BenchPart};
 use std::io::Write;
 use std::path::Path;
 
+/// Most stations along a profile: the samples of a section ([`Profile::from_section`]) and the envelope stations
+/// of a profile run (`envelope_spacing_m`). Ours: a million is a 1 mm spacing over a kilometre, finer than any
+/// terrain model, and keeps a profile's vectors within tens of MB.
+pub const MAX_STATIONS: usize = 1_000_000;
+
+/// Refuses a `spacing_m` (named `field` in the error) that puts more than [`MAX_STATIONS`] stations on `length_m`
+/// of profile; `fix` ends the hint (e.g. `, or a shorter line`).
+pub(crate) fn check_station_count(field: &str, spacing_m: f64, length_m: f64, fix: &str) -> Result<()> {
+    if length_m / spacing_m <= MAX_STATIONS as f64 {
+        return Ok(());
+    }
+    let text = crate::error::number_text;
+    Err(Error::invalid(
+        field,
+        format!("{} m gives more than a million stations on a {} m profile", text(spacing_m), text(length_m)),
+        format!(
+            "use a wider spacing, at least {} m{fix}",
+            text(crate::error::round_up_3_digits(length_m / MAX_STATIONS as f64))
+        ),
+    ))
+}
+
 /// A slope profile: vertices (x_m, z_m) with x non-decreasing, a material index per segment and the material names.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Profile {
@@ -195,7 +217,8 @@ impl Profile {
     /// material name there, or `None` off the surface. A segment's material is sampled at its midpoint.
     ///
     /// # Errors
-    /// Fewer than 2 distinct points, a spacing that is not positive, or the surface missing somewhere on the line.
+    /// Fewer than 2 distinct points, a spacing that is not positive or that gives more than [`MAX_STATIONS`]
+    /// samples, or the surface missing somewhere on the line.
     pub fn from_section(
         polyline_xy: &[[f64; 2]],
         spacing_m: f64,
@@ -229,6 +252,7 @@ impl Profile {
                 "give the section as a polyline of two or more (x, y) points",
             ));
         }
+        check_station_count("section.spacing_m", spacing_m, total, " (--spacing-m), or a shorter --line")?;
         let mut s_list: Vec<f64> = Vec::new();
         let n_steps = (total / spacing_m).floor() as usize;
         s_list.extend((0..=n_steps).map(|k| k as f64 * spacing_m));

@@ -281,13 +281,7 @@ impl ProfileScenario {
                 "e.g. envelope_spacing_m = 1.0",
             ));
         }
-        if (x1 - x0) / self.envelope_spacing_m > 1e6 {
-            return Err(Error::invalid(
-                "envelope_spacing_m",
-                format!("{} m gives more than a million stations on a {} m profile", self.envelope_spacing_m, x1 - x0),
-                "use a wider spacing",
-            ));
-        }
+        super::profile::check_station_count("envelope_spacing_m", self.envelope_spacing_m, x1 - x0, "")?;
         for (i, &x) in self.collectors_x_m.iter().enumerate() {
             if !(x >= x0 && x <= x1) {
                 return Err(Error::invalid(

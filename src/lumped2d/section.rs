@@ -37,7 +37,8 @@ pub enum SectionMaterials {
 /// the file's frame: (x, y) for z-up files, (x, z) for y-up ones), sampling every `spacing_m`.
 ///
 /// # Errors
-/// A mesh without usable triangles or with non-finite vertices, a bad threshold, and the errors of
+/// A mesh without usable triangles or with non-finite vertices, a bad threshold, a material name the profile CSV
+/// cannot hold (a comma, a quote or a line break), and the errors of
 /// [`Profile::from_section`] (a bad spacing or line, or the surface missing somewhere on the line, located in the
 /// file's coordinates).
 ///
@@ -59,6 +60,9 @@ pub fn section_from_mesh(
     spacing_m: f64,
     materials: &SectionMaterials,
 ) -> Result<Profile> {
+    if let SectionMaterials::Single(name) = materials {
+        check_material_name("section.material", name)?;
+    }
     if let SectionMaterials::BySlope { face_slope_deg } = materials {
         if !(face_slope_deg.is_finite() && (0.0..90.0).contains(face_slope_deg)) {
             return Err(Error::invalid(
@@ -99,4 +103,20 @@ pub fn section_from_mesh(
         };
         Some((p.z_m + origin.z, name))
     })
+}
+
+/// Refuses a material name (`field` names it in the error) that is empty or that the profile CSV
+/// (`x_m,z_m,material`, written without quoting) cannot hold: one with a comma, a double quote or a line break.
+fn check_material_name(field: &str, name: &str) -> Result<()> {
+    if name.trim().is_empty() {
+        return Err(Error::invalid(field, "is empty", "give a non-empty name, e.g. floor"));
+    }
+    if name.contains([',', '"', '\n', '\r']) {
+        return Err(Error::invalid(
+            field,
+            format!("{name:?} contains a comma, a double quote or a line break, which would break the profile CSV"),
+            "give one name of letters, digits, - or _, e.g. floor",
+        ));
+    }
+    Ok(())
 }

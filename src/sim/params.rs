@@ -13,6 +13,11 @@ pub enum CrDraw {
     PerImpact,
 }
 
+/// Smallest `sample_spacing_m`, m. Ours: in flight a rock is sampled every spacing, so 1 cm is a sample every
+/// 0.2 ms at 50 m/s (ten per contact time step), far finer than any raster cell or collector needs, while a spacing
+/// of 1e-12 m would take 10¹² samples per flight step and never finish.
+pub const MIN_SAMPLE_SPACING_M: f64 = 0.01;
+
 /// Engine settings. Defaults follow physics.md §6 and §8; values marked "ours" are our own choice.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -40,7 +45,8 @@ pub struct SimParams {
     pub solver_iterations: usize,
     /// When restitution coefficients are drawn (default: per rock).
     pub cr_draw: CrDraw,
-    /// Horizontal spacing of the path samples that feed rasters and collectors, m (default: 0.5).
+    /// Horizontal spacing of the path samples that feed rasters and collectors, m (default: 0.5; at least
+    /// [`MIN_SAMPLE_SPACING_M`]).
     pub sample_spacing_m: f64,
     /// Optional effects (default: none).
     pub effects: Effects,
@@ -89,6 +95,16 @@ impl SimParams {
         pos("stop_spin_radps", self.stop_spin_radps, "use about 0.2 rad/s")?;
         pos("stop_duration_s", self.stop_duration_s, "use about 0.5 s")?;
         pos("sample_spacing_m", self.sample_spacing_m, "use half the raster cell size or less")?;
+        if self.sample_spacing_m < MIN_SAMPLE_SPACING_M {
+            return Err(Error::invalid(
+                format!("{prefix}sample_spacing_m"),
+                format!(
+                    "{} m is below the smallest spacing, {MIN_SAMPLE_SPACING_M} m",
+                    crate::error::number_text(self.sample_spacing_m)
+                ),
+                format!("use {MIN_SAMPLE_SPACING_M} m or more (half the raster cell size is enough)"),
+            ));
+        }
         for (name, v) in
             [("bounce_threshold_mps", self.bounce_threshold_mps), ("penetration_slop_m", self.penetration_slop_m)]
         {

@@ -3,7 +3,12 @@
 //! # Units
 //! Lengths in m, angles in degrees. x runs downslope, z up; the profile starts at the crest floor.
 
-use crate::error::{Error, Result};
+use crate::error::{number_text, Error, Result};
+
+/// Most triangles of a bench mesh ([`BenchGeometry::mesh`]). Ours: 10⁷ triangles hold about 0.5 GB as a mesh
+/// (vertices, triangles, groups) and several times that once the 3DRB terrain is built from it, and are a
+/// 10 cm edge over the default 100 m × 300 m stack: finer than any rock that runs on it needs.
+pub const MAX_MESH_TRIANGLES: usize = 10_000_000;
 
 /// Geometry of a benched slope. Defaults are the paper's stack: 5 benches of 20 m at 60° with 7 m catch benches.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -106,7 +111,48 @@ impl BenchGeometry {
         if self.n_benches == 0 {
             return Err(Error::invalid(field("n_benches"), "must be at least 1", "set n_benches = 1 or more"));
         }
-        Ok(())
+        self.check_mesh_size(prefix)
+    }
+
+    /// Refuses a geometry whose 3D mesh would have more than [`MAX_MESH_TRIANGLES`] triangles, counted without
+    /// building it. The error names `max_edge_m`, or `n_benches` when even one triangle pair per segment is too many.
+    fn check_mesh_size(&self, prefix: &str) -> Result<()> {
+        let triangles = self.mesh_triangle_count(self.max_edge_m);
+        if triangles <= MAX_MESH_TRIANGLES as f64 {
+            return Ok(());
+        }
+        let too_many_benches = self.mesh_triangle_count(f64::INFINITY) > MAX_MESH_TRIANGLES as f64;
+        Err(Error::invalid(
+            format!("{prefix}{}", if too_many_benches { "n_benches" } else { "max_edge_m" }),
+            format!(
+                "{} benches over a {} m lateral width with {} m triangle edges make {} triangles, more than the \
+                 limit of {MAX_MESH_TRIANGLES}",
+                self.n_benches,
+                number_text(self.lateral_width_m),
+                number_text(self.max_edge_m),
+                number_text(triangles)
+            ),
+            if too_many_benches {
+                "give fewer benches".to_string()
+            } else {
+                "give longer triangle edges, a narrower lateral width or fewer benches".to_string()
+            },
+        ))
+    }
+
+    /// Number of triangles of [`BenchGeometry::mesh`] with edges of at most `max_edge_m`, from the segment
+    /// lengths alone (as f64, so that any geometry is counted without overflow or allocation). A segment whose
+    /// length is a whole number of edges may get one piece more in the mesh, from rounding.
+    pub fn mesh_triangle_count(&self, max_edge_m: f64) -> f64 {
+        let pieces = |len_m: f64| (len_m / max_edge_m).ceil().max(1.0);
+        let floor = |width_m: f64| if width_m > 0.0 { pieces(width_m) } else { 0.0 };
+        let face_m = self.face_run_m().hypot(self.bench_height_m);
+        let segments = floor(self.crest_floor_m)
+            + self.n_faces() as f64 * pieces(face_m)
+            + self.n_benches as f64 * floor(self.bench_width_m)
+            + floor(self.toe_floor_m);
+        let rows = (self.lateral_width_m / max_edge_m).ceil().max(1.0);
+        2.0 * segments * rows
     }
 
     /// Horizontal run of one face, m.
@@ -269,5 +315,23 @@ mod tests {
             assert!(det > 0.0);
         }
         assert!(m.group.contains(&0) && m.group.contains(&1));
+    }
+
+    #[test]
+    fn triangles_are_counted_before_the_mesh_is_built() {
+        for g in [
+            BenchGeometry::default(),
+            BenchGeometry { max_edge_m: 1.3, n_benches: 2, lateral_width_m: 33.0, ..Default::default() },
+        ] {
+            let (counted, built) = (g.mesh_triangle_count(g.max_edge_m), g.mesh().triangles.len() as f64);
+            // Within one piece per segment (4 segments a bench at most) of every row.
+            let rows = (g.lateral_width_m / g.max_edge_m).ceil();
+            assert!((counted - built).abs() <= 2.0 * rows * (g.n_benches as f64 * 2.0 + 4.0), "{counted} vs {built}");
+        }
+        let fine = BenchGeometry { max_edge_m: 0.001, ..Default::default() };
+        let e = fine.validate("geometry.").unwrap_err().to_string();
+        assert!(e.contains("geometry.max_edge_m") && e.contains("more than the limit"), "{e}");
+        let many = BenchGeometry { n_benches: 100_000_000, ..Default::default() };
+        assert!(many.validate("").unwrap_err().to_string().starts_with("n_benches"));
     }
 }

@@ -1,0 +1,215 @@
+//! Limits and output hygiene: sizes that would exhaust memory or never finish (raster cells, section samples, mesh
+//! triangles, rocks, threads, path samples) and output paths that would leave a stray file or overwrite an input
+//! are refused with exit code 2 and a message naming the flag or key, before any heavy work and without writing.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+/// The repository's file `rel`.
+fn shipped(rel: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+/// Runs `talus args` in `dir`.
+fn talus(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_talus")).args(args).current_dir(dir).output().unwrap()
+}
+
+/// Runs `talus args` in `dir`, expecting a quick refusal: exit code 2, every `needles` in the message, a fix
+/// suggested, and `dir` holding only what it held before (no output, no temporary file).
+fn refused(args: &[&str], dir: &Path, needles: &[&str]) -> String {
+    let before = listing(dir);
+    let t0 = Instant::now();
+    let o = talus(args, dir);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+    assert!(t0.elapsed() < Duration::from_secs(5), "{args:?} took {:?} to be refused", t0.elapsed());
+    for n in needles {
+        assert!(err.contains(n), "{args:?}: the message lacks '{n}': {err}");
+    }
+    assert!(err.contains("how to fix"), "{args:?}: no fix suggested: {err}");
+    assert_eq!(listing(dir), before, "{args:?} left files behind");
+    err
+}
+
+/// The names in `dir`, hidden ones included, sorted.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    names
+}
+
+/// `examples/bench_stack.toml` in `dir` (its mesh by absolute path) with `from` replaced by `to`.
+fn bench_scenario(dir: &Path, from: &str, to: &str) -> PathBuf {
+    let text = std::fs::read_to_string(shipped("examples/bench_stack.toml")).unwrap();
+    let mesh = shipped("meshes/bench_stack/bench_stack.obj");
+    assert!(text.contains(from), "{from}");
+    let text = text
+        .replace("../meshes/bench_stack/bench_stack.obj", &mesh.display().to_string().replace('\\', "/"))
+        .replace(from, to);
+    let p = dir.join("scenario.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// The bench stack terrain copied into `dir`.
+fn stack_obj(dir: &Path) -> PathBuf {
+    let p = dir.join("stack.obj");
+    std::fs::copy(shipped("meshes/bench_stack/bench_stack.obj"), &p).unwrap();
+    p
+}
+
+#[test]
+fn a_raster_cell_size_over_the_cell_limit_is_refused_with_the_smallest_cell_allowed() {
+    for cell in ["1e-12", "0.0001"] {
+        let dir = tempfile::tempdir().unwrap();
+        bench_scenario(dir.path(), "cell_size_m = 1.0", &format!("cell_size_m = {cell}"));
+        let err = refused(
+            &["run", "scenario.toml", "--out", "out"],
+            dir.path(),
+            &["output.cell_size_m", "174.3 m × 100.0 m", "raster cells", "100000000", "at least 0.0133 m"],
+        );
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
+fn a_section_of_more_than_a_million_samples_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    stack_obj(dir.path());
+    for (line, spacing) in [("0,30,1e308,30", "1"), ("0,30,160,30", "1e-9")] {
+        let args = ["section", "stack.obj", "--line", line, "--spacing-m", spacing, "--out", "s.csv"];
+        refused(&args, dir.path(), &["spacing_m", "more than a million stations", "--spacing-m"]);
+    }
+}
+
+#[test]
+fn a_bench_mesh_over_the_triangle_limit_is_refused_before_it_is_built() {
+    let dir = tempfile::tempdir().unwrap();
+    for (flag, value) in [("--max-edge-m", "0.001"), ("--lateral-width-m", "1e12"), ("--benches", "100000000")] {
+        let named = if flag == "--lateral-width-m" { "--max-edge-m" } else { flag };
+        refused(
+            &["mesh", "bench", flag, value, "--out", "m.obj"],
+            dir.path(),
+            &[named, "triangles, more than the limit of 10000000"],
+        );
+    }
+}
+
+#[test]
+fn a_bench_study_with_a_mesh_over_the_triangle_limit_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(shipped("examples/benches_quick.toml")).unwrap();
+    assert!(text.contains("max_edge_m = 2.5"));
+    std::fs::write(dir.path().join("study.toml"), text.replace("max_edge_m = 2.5", "max_edge_m = 0.001")).unwrap();
+    refused(
+        &["benches", "--config", "study.toml", "--out", "out"],
+        dir.path(),
+        &["geometry.max_edge_m", "more than the limit of 10000000"],
+    );
+}
+
+#[test]
+fn more_rocks_than_a_run_can_hold_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    bench_scenario(dir.path(), "seed = 1", "seed = 1");
+    refused(
+        &["run", "scenario.toml", "--rocks", "100000000000", "--out", "out"],
+        dir.path(),
+        &["sources", "100000000000 rocks", "limit of 10000000", "--rocks"],
+    );
+    // The same from the sources' counts.
+    bench_scenario(dir.path(), "count = 1000", "count = 20000000");
+    refused(&["run", "scenario.toml", "--out", "out"], dir.path(), &["20000000 rocks", "limit of 10000000"]);
+}
+
+#[test]
+fn more_threads_than_the_limit_are_refused_and_the_limit_is_in_the_help() {
+    let dir = tempfile::tempdir().unwrap();
+    bench_scenario(dir.path(), "seed = 1", "seed = 1");
+    refused(
+        &["run", "scenario.toml", "--threads", "100000", "--out", "out"],
+        dir.path(),
+        &["--threads", "100000 threads", "limit of 1024"],
+    );
+    bench_scenario(dir.path(), "seed = 1", "seed = 1\nthreads = 100000");
+    refused(&["run", "scenario.toml", "--out", "out"], dir.path(), &["simulation.threads", "limit of 1024"]);
+    let help = String::from_utf8_lossy(&talus(&["run", "--help"], dir.path()).stdout).into_owned();
+    assert!(help.contains("1 to 1024"), "{help}");
+}
+
+#[test]
+fn a_sample_spacing_below_a_centimetre_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    bench_scenario(dir.path(), "seed = 1", "seed = 1\nsample_spacing_m = 1e-12");
+    refused(
+        &["run", "scenario.toml", "--paths", "2", "--out", "out"],
+        dir.path(),
+        &["simulation.sample_spacing_m", "smallest spacing, 0.01 m"],
+    );
+}
+
+#[test]
+fn out_as_a_folder_is_refused_and_no_temporary_file_is_left() {
+    let dir = tempfile::tempdir().unwrap();
+    stack_obj(dir.path());
+    std::fs::create_dir(dir.path().join("folder")).unwrap();
+    let section = ["section", "stack.obj", "--line", "0,30,160,30", "--out", "folder"];
+    refused(&section, dir.path(), &["--out", "must be a file path, not a folder"]);
+    refused(&["mesh", "bench", "--out", "folder"], dir.path(), &["--out", "must be a file path, not a folder"]);
+    assert!(std::fs::read_dir(dir.path().join("folder")).unwrap().next().is_none());
+}
+
+#[test]
+fn a_failed_rename_removes_the_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = dir.path().join("folder");
+    std::fs::create_dir(&target).unwrap();
+    std::fs::write(target.join("keep"), "x").unwrap();
+    let e = talus::io::write_bytes_atomic(&target, b"complete").unwrap_err();
+    assert!(e.to_string().contains("folder"), "{e}");
+    assert_eq!(listing(dir.path()), vec!["folder".to_string()], "the temporary file is left");
+}
+
+#[test]
+fn out_naming_the_input_terrain_is_refused_and_the_terrain_kept() {
+    let dir = tempfile::tempdir().unwrap();
+    let obj = stack_obj(dir.path());
+    std::fs::create_dir(dir.path().join("sub")).unwrap();
+    let before = std::fs::read(&obj).unwrap();
+    for out in ["stack.obj", "sub/../stack.obj", obj.to_str().unwrap()] {
+        let args = ["section", "stack.obj", "--line", "0,30,160,30", "--out", out];
+        refused(&args, dir.path(), &["--out", "input file", "would be overwritten"]);
+    }
+    assert_eq!(std::fs::read(&obj).unwrap(), before);
+}
+
+#[test]
+fn a_mesh_file_extension_that_does_not_match_what_is_written_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    refused(&["mesh", "bench", "--out", "x.stl"], dir.path(), &["--out", "x.stl", ".obj"]);
+    refused(&["mesh", "bench", "--2d", "--out", "x.obj"], dir.path(), &["--out", "x.obj", ".csv"]);
+    refused(&["mesh", "bench", "--out", "x"], dir.path(), &["--out", ".obj"]);
+    // The matching extensions are written, in any case.
+    for args in [vec!["mesh", "bench", "--out", "x.OBJ"], vec!["mesh", "bench", "--2d", "--out", "x.csv"]] {
+        let o = talus(&args, dir.path());
+        assert!(o.status.success(), "{args:?}: {}", String::from_utf8_lossy(&o.stderr));
+    }
+}
+
+#[test]
+fn section_material_names_that_would_break_the_csv_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    stack_obj(dir.path());
+    for name in ["a,b", "a\"b", "a\nb", " "] {
+        let args = ["section", "stack.obj", "--line", "0,30,160,30", "--material", name, "--out", "s.csv"];
+        refused(&args, dir.path(), &["section.material"]);
+    }
+    let args = ["section", "stack.obj", "--line", "0,30,160,30", "--material", "rock_1", "--out", "s.csv"];
+    let o = talus(&args, dir.path());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = std::fs::read_to_string(dir.path().join("s.csv")).unwrap();
+    assert!(csv.lines().skip(1).all(|l| l.split(',').count() == 3 && l.ends_with(",rock_1")), "{csv}");
+}
