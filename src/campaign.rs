@@ -4,7 +4,7 @@
 //! the line and the column.
 
 use crate::error::{Error, Result};
-use crate::io::csv_text::Table;
+use crate::io::csv_text::{Row, Table};
 use crate::rock::{RockBody, RockSize, ShapeKind};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -33,6 +33,8 @@ pub struct Deposition {
     pub position_m: [f64; 3],
     /// Horizontal distance from release to rest, m (computed if absent from the file).
     pub runout_m: f64,
+    /// 1-based line of `observed_deposition.csv` the rest point was read from, for error messages.
+    pub line: usize,
 }
 
 /// One point of a tracked path.
@@ -74,69 +76,54 @@ pub struct Campaign {
     pub tracks: BTreeMap<String, Vec<TrackPoint>>,
 }
 
+/// What a campaign's rocks move on, which decides the columns its files must have.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ground {
+    /// A 3D terrain (3DRB): positions need `y_m` and releases `vy_mps`.
+    Terrain,
+    /// A 2D profile (2DLM): `y_m` and `vy_mps` may be left out (they are then 0).
+    Profile,
+}
+
 /// Hint for a missing campaign column.
 const COLUMN_HINT: &str = "add the column (see the campaign format in README.md)";
 
+/// Hint for a missing velocity column.
+const VELOCITY_HINT: &str = "add the column: the initial velocity in m/s, 0 for a block dropped at rest";
+
+/// Hint for a missing `y_m` column.
+const Y_HINT: &str = "add the column: a campaign on a 3D terrain gives every point its y_m (only a profile campaign \
+                      may leave it out)";
+
 impl Campaign {
     /// Reads `release_points.csv`, `observed_deposition.csv` (optional: a campaign to predict has none),
-    /// `block_metadata.csv` and `observed_trajectories.csv` (optional) from `dir`.
+    /// `block_metadata.csv` and `observed_trajectories.csv` (optional) from `dir`, on the ground its release file
+    /// implies: a 3D terrain when it has a `y_m` column, a profile otherwise. A caller that knows the ground uses
+    /// [`Campaign::read_on`].
+    ///
+    /// # Errors
+    /// As [`Campaign::read_on`].
     pub fn read(dir: &Path) -> Result<Campaign> {
         let rel = Table::read(&dir.join("release_points.csv"), false)?;
-        // `y_m` may be absent in a profile (2D) campaign: it is then 0.
-        let (id, x, z, b) = (
-            rel.need("trajectory_id", COLUMN_HINT)?,
-            rel.need("x_m", COLUMN_HINT)?,
-            rel.need("z_m", COLUMN_HINT)?,
-            rel.need("block_id", COLUMN_HINT)?,
-        );
-        let mut releases = Vec::new();
-        let mut seen = std::collections::BTreeSet::new();
-        for row in &rel.rows {
-            let trajectory_id = rel.text(row, id, "trajectory_id")?.to_string();
-            if !seen.insert(trajectory_id.clone()) {
-                return Err(rel.error(
-                    row,
-                    format!("trajectory_id '{trajectory_id}' appears twice"),
-                    "give every run its own id",
-                ));
-            }
-            let v = |n: &str| rel.optional_number(row, n).map(|v| v.unwrap_or(0.0));
-            releases.push(Release {
-                trajectory_id,
-                position_m: [rel.number(row, x, "x_m")?, v("y_m")?, rel.number(row, z, "z_m")?],
-                velocity_mps: [v("vx_mps")?, v("vy_mps")?, v("vz_mps")?],
-                spin_radps: [v("wx_radps")?, v("wy_radps")?, v("wz_radps")?],
-                block_id: rel.text(row, b, "block_id")?.to_string(),
-            });
-        }
-        if releases.is_empty() {
-            return Err(Error::format(rel.source.clone(), "holds no release", "add one row per released rock"));
-        }
-        let blk = Table::read(&dir.join("block_metadata.csv"), false)?;
-        let (bid, m) = (blk.need("block_id", COLUMN_HINT)?, blk.need("mass_kg", COLUMN_HINT)?);
-        let (sx, sy, sz) = (
-            blk.need("size_x_m", COLUMN_HINT)?,
-            blk.need("size_y_m", COLUMN_HINT)?,
-            blk.need("size_z_m", COLUMN_HINT)?,
-        );
-        let mut blocks = BTreeMap::new();
-        for row in &blk.rows {
-            let block = Block {
-                block_id: blk.text(row, bid, "block_id")?.to_string(),
-                name: blk.field(row, blk.col("name")).to_string(),
-                mass_kg: blk.number(row, m, "mass_kg")?,
-                size_m: [
-                    blk.number(row, sx, "size_x_m")?,
-                    blk.number(row, sy, "size_y_m")?,
-                    blk.number(row, sz, "size_z_m")?,
-                ],
-                shape: blk.field(row, blk.col("shape")).to_string(),
-            };
-            if block.mass_kg <= 0.0 || block.size_m.iter().any(|&s| s <= 0.0) {
-                return Err(blk.error(row, "mass and sizes must be positive", "fix the block's mass_kg and size_*_m"));
-            }
-            blocks.insert(block.block_id.clone(), block);
-        }
+        let ground = if rel.col("y_m").is_some() { Ground::Terrain } else { Ground::Profile };
+        Campaign::from_release_table(dir, &rel, ground)
+    }
+
+    /// Reads the campaign in `dir` (see [`Campaign::read`]) for rocks moving on `ground`.
+    ///
+    /// # Errors
+    /// I/O errors; a malformed CSV file (see [`Table`]); a missing column (`y_m` and `vy_mps` are required on a
+    /// terrain only, the spin and `observed_runout_m` never); a value that is not a number; an id that appears
+    /// twice in a file; a block that is not positive; a release of an unknown block; a rest point of an unknown
+    /// run, of another block or with a negative run-out. Each names the file, the line and the column.
+    pub fn read_on(dir: &Path, ground: Ground) -> Result<Campaign> {
+        Campaign::from_release_table(dir, &Table::read(&dir.join("release_points.csv"), false)?, ground)
+    }
+
+    /// The campaign in `dir` whose release file is `rel`.
+    fn from_release_table(dir: &Path, rel: &Table, ground: Ground) -> Result<Campaign> {
+        let releases = read_releases(rel, ground)?;
+        let blocks = read_blocks(&dir.join("block_metadata.csv"))?;
         for r in &releases {
             if !blocks.contains_key(&r.block_id) {
                 return Err(Error::format(
@@ -149,41 +136,29 @@ impl Campaign {
                 ));
             }
         }
-        let mut depositions = BTreeMap::new();
-        let dep_path = dir.join("observed_deposition.csv");
-        if dep_path.is_file() {
-            let dep = Table::read(&dep_path, false)?;
-            let (id, x, z) =
-                (dep.need("trajectory_id", COLUMN_HINT)?, dep.need("x_m", COLUMN_HINT)?, dep.need("z_m", COLUMN_HINT)?);
-            for row in &dep.rows {
-                let tid = dep.text(row, id, "trajectory_id")?.to_string();
-                let Some(rel) = releases.iter().find(|r| r.trajectory_id == tid) else {
-                    return Err(dep.error(
-                        row,
-                        format!("run '{tid}' has no release in release_points.csv"),
-                        "fix the trajectory_id",
-                    ));
-                };
-                let b = dep.field(row, dep.col("block_id"));
-                if !b.is_empty() && b != rel.block_id {
-                    return Err(dep.error(
-                        row,
-                        format!("run '{tid}' rests as block '{b}' but was released as block '{}'", rel.block_id),
-                        "make block_id agree with release_points.csv (or leave it empty here)",
-                    ));
-                }
-                let p = [
-                    dep.number(row, x, "x_m")?,
-                    dep.optional_number(row, "y_m")?.unwrap_or(0.0),
-                    dep.number(row, z, "z_m")?,
-                ];
-                let computed = ((p[0] - rel.position_m[0]).powi(2) + (p[1] - rel.position_m[1]).powi(2)).sqrt();
-                let runout_m = dep.optional_number(row, "observed_runout_m")?.unwrap_or(computed);
-                depositions.insert(tid.clone(), Deposition { trajectory_id: tid, position_m: p, runout_m });
-            }
-        }
+        let depositions = read_depositions(&dir.join("observed_deposition.csv"), &releases, ground)?;
         let tracks = read_tracks(&dir.join("observed_trajectories.csv"), &releases)?;
         Ok(Campaign { dir: dir.to_path_buf(), releases, depositions, blocks, tracks })
+    }
+
+    /// Refuses a rest point that is not over the ground: `over(p)` tells whether the rest point `p` (campaign
+    /// frame) lies over the terrain or profile, which `ground` describes for the message (e.g. `the terrain, which
+    /// spans x [0, 100] and y [0, 200]`).
+    ///
+    /// # Errors
+    /// The first such rest point in file order, at its line of `observed_deposition.csv`, naming the run, the
+    /// point and `ground`.
+    pub fn check_rest_points(&self, over: impl Fn([f64; 3]) -> bool, ground: &str) -> Result<()> {
+        let off = self.depositions.values().filter(|d| !over(d.position_m)).min_by_key(|d| d.line);
+        match off {
+            None => Ok(()),
+            Some(d) => Err(Error::at_line(
+                self.dir.join("observed_deposition.csv"),
+                d.line,
+                format!("the rest point {:?} of run '{}' is not over {ground}", d.position_m, d.trajectory_id),
+                "check that the campaign and the terrain (or profile) share a frame, and the point's coordinates",
+            )),
+        }
     }
 
     /// The rock body of a block. The shape is the block's own if given; otherwise inferred from its sizes (our
@@ -211,6 +186,166 @@ impl Campaign {
         };
         RockBody::new(&kind, RockSize::DimensionsAndMass { size_m: block.size_m, mass_kg: block.mass_kg }, &field)
     }
+}
+
+/// Notes the id `id` of column `name` in `row` of `t`; `seen` holds the ids met so far with their lines.
+///
+/// # Errors
+/// The id was met before: an error at this line naming both lines, with `hint`.
+fn note_unique(
+    t: &Table,
+    row: &Row,
+    name: &str,
+    id: &str,
+    seen: &mut BTreeMap<String, usize>,
+    hint: &str,
+) -> Result<()> {
+    match seen.insert(id.to_string(), row.line) {
+        None => Ok(()),
+        Some(first) => {
+            Err(t.error(row, format!("{name} '{id}' appears twice, on lines {first} and {}", row.line), hint))
+        }
+    }
+}
+
+/// The column of `name` (`y_m`, `vy_mps`) that only a terrain campaign needs: required on a terrain (an error
+/// naming it, with `hint`), `None` on a profile.
+fn terrain_column(t: &Table, name: &str, ground: Ground, hint: &str) -> Result<Option<usize>> {
+    match ground {
+        Ground::Terrain => t.need(name, hint).map(Some),
+        Ground::Profile => Ok(None),
+    }
+}
+
+/// The number of column `name` in `row`: from the column `required` by a terrain campaign, else (a profile) the
+/// optional column's value, 0 when it is absent or empty.
+///
+/// # Errors
+/// A field that is not a number; an empty field of a required column.
+fn terrain_value(t: &Table, row: &Row, required: Option<usize>, name: &str) -> Result<f64> {
+    match required {
+        Some(c) => t.number(row, c, name),
+        None => Ok(t.optional_number(row, name)?.unwrap_or(0.0)),
+    }
+}
+
+/// Reads the releases of `release_points.csv` (the table `rel`) for a campaign on `ground`.
+///
+/// # Errors
+/// See [`Campaign::read_on`]; no release at all.
+fn read_releases(rel: &Table, ground: Ground) -> Result<Vec<Release>> {
+    let (id, x, z, b) = (
+        rel.need("trajectory_id", COLUMN_HINT)?,
+        rel.need("x_m", COLUMN_HINT)?,
+        rel.need("z_m", COLUMN_HINT)?,
+        rel.need("block_id", COLUMN_HINT)?,
+    );
+    let (vx, vz) = (rel.need("vx_mps", VELOCITY_HINT)?, rel.need("vz_mps", VELOCITY_HINT)?);
+    let (y, vy) = (terrain_column(rel, "y_m", ground, Y_HINT)?, terrain_column(rel, "vy_mps", ground, VELOCITY_HINT)?);
+    let mut releases = Vec::new();
+    let mut seen = BTreeMap::new();
+    for row in &rel.rows {
+        let trajectory_id = rel.text(row, id, "trajectory_id")?.to_string();
+        note_unique(rel, row, "trajectory_id", &trajectory_id, &mut seen, "give every run its own id")?;
+        let spin = |n: &str| rel.optional_number(row, n).map(|v| v.unwrap_or(0.0));
+        releases.push(Release {
+            trajectory_id,
+            position_m: [rel.number(row, x, "x_m")?, terrain_value(rel, row, y, "y_m")?, rel.number(row, z, "z_m")?],
+            velocity_mps: [
+                rel.number(row, vx, "vx_mps")?,
+                terrain_value(rel, row, vy, "vy_mps")?,
+                rel.number(row, vz, "vz_mps")?,
+            ],
+            spin_radps: [spin("wx_radps")?, spin("wy_radps")?, spin("wz_radps")?],
+            block_id: rel.text(row, b, "block_id")?.to_string(),
+        });
+    }
+    if releases.is_empty() {
+        return Err(Error::format(rel.source.clone(), "holds no release", "add one row per released rock"));
+    }
+    Ok(releases)
+}
+
+/// Reads the blocks of `block_metadata.csv` at `path`, by id.
+///
+/// # Errors
+/// See [`Campaign::read_on`].
+fn read_blocks(path: &Path) -> Result<BTreeMap<String, Block>> {
+    let blk = Table::read(path, false)?;
+    let (bid, m) = (blk.need("block_id", COLUMN_HINT)?, blk.need("mass_kg", COLUMN_HINT)?);
+    let (sx, sy, sz) =
+        (blk.need("size_x_m", COLUMN_HINT)?, blk.need("size_y_m", COLUMN_HINT)?, blk.need("size_z_m", COLUMN_HINT)?);
+    let mut blocks = BTreeMap::new();
+    let mut seen = BTreeMap::new();
+    for row in &blk.rows {
+        let block = Block {
+            block_id: blk.text(row, bid, "block_id")?.to_string(),
+            name: blk.field(row, blk.col("name")).to_string(),
+            mass_kg: blk.number(row, m, "mass_kg")?,
+            size_m: [
+                blk.number(row, sx, "size_x_m")?,
+                blk.number(row, sy, "size_y_m")?,
+                blk.number(row, sz, "size_z_m")?,
+            ],
+            shape: blk.field(row, blk.col("shape")).to_string(),
+        };
+        note_unique(&blk, row, "block_id", &block.block_id, &mut seen, "give every block its own id")?;
+        if block.mass_kg <= 0.0 || block.size_m.iter().any(|&s| s <= 0.0) {
+            return Err(blk.error(row, "mass and sizes must be positive", "fix the block's mass_kg and size_*_m"));
+        }
+        blocks.insert(block.block_id.clone(), block);
+    }
+    Ok(blocks)
+}
+
+/// Reads the rest points of `observed_deposition.csv` at `path` (none if the file does not exist), by run id, for
+/// the `releases` of a campaign on `ground`.
+///
+/// # Errors
+/// See [`Campaign::read_on`].
+fn read_depositions(path: &Path, releases: &[Release], ground: Ground) -> Result<BTreeMap<String, Deposition>> {
+    let mut depositions = BTreeMap::new();
+    if !path.is_file() {
+        return Ok(depositions);
+    }
+    let dep = Table::read(path, false)?;
+    let (id, x, z) =
+        (dep.need("trajectory_id", COLUMN_HINT)?, dep.need("x_m", COLUMN_HINT)?, dep.need("z_m", COLUMN_HINT)?);
+    let y = terrain_column(&dep, "y_m", ground, Y_HINT)?;
+    let mut seen = BTreeMap::new();
+    for row in &dep.rows {
+        let tid = dep.text(row, id, "trajectory_id")?.to_string();
+        note_unique(&dep, row, "trajectory_id", &tid, &mut seen, "keep one rest point per run")?;
+        let Some(rel) = releases.iter().find(|r| r.trajectory_id == tid) else {
+            return Err(dep.error(
+                row,
+                format!("run '{tid}' has no release in release_points.csv"),
+                "fix the trajectory_id",
+            ));
+        };
+        let b = dep.field(row, dep.col("block_id"));
+        if !b.is_empty() && b != rel.block_id {
+            return Err(dep.error(
+                row,
+                format!("run '{tid}' rests as block '{b}' but was released as block '{}'", rel.block_id),
+                "make block_id agree with release_points.csv (or leave it empty here)",
+            ));
+        }
+        let p = [dep.number(row, x, "x_m")?, terrain_value(&dep, row, y, "y_m")?, dep.number(row, z, "z_m")?];
+        let computed = ((p[0] - rel.position_m[0]).powi(2) + (p[1] - rel.position_m[1]).powi(2)).sqrt();
+        let runout_m = match dep.optional_number(row, "observed_runout_m")? {
+            Some(r) if r < 0.0 => {
+                return Err(dep.error(
+                    row,
+                    format!("observed_runout_m is {r}: a run-out is a distance and cannot be negative"),
+                    "give the horizontal distance from release to rest, or leave the field empty to compute it",
+                ))
+            }
+            r => r.unwrap_or(computed),
+        };
+        depositions.insert(tid.clone(), Deposition { trajectory_id: tid, position_m: p, runout_m, line: row.line });
+    }
+    Ok(depositions)
 }
 
 /// Reads tracked paths (`trajectory_id`, `time_s`, `x_m`, `y_m` (absent on a profile), `z_m`), if the file
@@ -273,7 +408,8 @@ mod tests {
         (dir, c)
     }
 
-    const RELEASE: &str = "trajectory_id,x_m,y_m,z_m,block_id\nr1,0,0,10,1\nr2,0,1,10,2\n";
+    const RELEASE: &str =
+        "trajectory_id,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,block_id\nr1,0,0,10,0,0,0,1\nr2,0,1,10,0,0,0,2\n";
     const BLOCKS: &str = "block_id,mass_kg,size_x_m,size_y_m,size_z_m\n1,69,0.37,0.32,0.37\n2,79,0.5,0.3,0.39\n";
     const DEPOSITION: &str = "trajectory_id,x_m,y_m,z_m,block_id\nr1,20,0,0,1\nr2,25,1,0,2\n";
 
@@ -287,7 +423,7 @@ mod tests {
         let (_d, c) = campaign(RELEASE, &bad, DEPOSITION);
         let e = err(c);
         assert!(e.contains("block_metadata.csv:3") && e.contains("mass_kg") && e.contains("abc"), "{e}");
-        let dup = format!("{RELEASE}r1,1,1,10,1\n");
+        let dup = format!("{RELEASE}r1,1,1,10,0,0,0,1\n");
         let (_d, c) = campaign(&dup, BLOCKS, DEPOSITION);
         let e = err(c);
         assert!(e.contains("release_points.csv:4") && e.contains("twice"), "{e}");

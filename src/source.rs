@@ -59,7 +59,7 @@ impl Sources {
                     .campaign
                     .as_deref()
                     .ok_or_else(|| Error::invalid(format!("{f}.campaign"), "is missing", "give the campaign folder"))?;
-                let campaign = crate::campaign::Campaign::read(dir)?;
+                let campaign = crate::campaign::Campaign::read_on(dir, crate::campaign::Ground::Terrain)?;
                 for r in &campaign.releases {
                     let body = campaign.body(&campaign.blocks[&r.block_id])?;
                     let p = terrain.up.to_internal(r.position_m) - terrain.origin;

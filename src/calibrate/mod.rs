@@ -47,7 +47,7 @@ pub use metrics::{Metrics, MetricsSet};
 pub use model::{Model, RunSims};
 pub use report::Report;
 
-use crate::campaign::Campaign;
+use crate::campaign::{Campaign, Ground};
 use crate::error::{Error, Result};
 use fit::Context;
 use metrics::metrics_set;
@@ -63,7 +63,11 @@ pub fn open_model(
     cfg: &CalibrationConfig,
     source: &str,
 ) -> Result<Box<dyn Model>> {
-    let campaign = Campaign::read(campaign_dir)?;
+    let ground = match kind {
+        ModelKind::Rigid3d => Ground::Terrain,
+        ModelKind::Lumped2d => Ground::Profile,
+    };
+    let campaign = Campaign::read_on(campaign_dir, ground)?;
     let (runs, groups) = runs::field_runs(&campaign, cfg.group_link_m)?;
     let model: Box<dyn Model> = match kind {
         ModelKind::Rigid3d => Box::new(model3d::Model3d::new(&campaign, runs, groups, terrain_file, cfg, source)?),

@@ -35,7 +35,8 @@ pub struct Model2d {
 }
 
 impl Model2d {
-    /// Reads the profile and binds the runs of `campaign` to it.
+    /// Reads the profile and binds the runs of `campaign` to it; a rest point outside the profile's x range is
+    /// refused ([`Campaign::check_rest_points`]).
     pub fn new(
         campaign: &Campaign,
         runs: Vec<FieldRun>,
@@ -47,6 +48,9 @@ impl Model2d {
         let mut model = Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
             .with_release_attempts(cfg.release_attempts)
             .with_rest_noise(cfg.rest_noise_m);
+        let (x0, x1) = model.profile.x_range_m();
+        campaign
+            .check_rest_points(|p| (x0..=x1).contains(&p[0]), &format!("the profile, whose x range is [{x0}, {x1}]"))?;
         model.files = Some((campaign.dir.clone(), profile_file.to_path_buf()));
         Ok(model.with_tracks(&campaign.tracks, cfg.track_noise_m)?.with_bounce_reads(cfg.bounce_weight != Some(0.0)))
     }

@@ -18,7 +18,7 @@ use crate::rock::RockBody;
 use crate::scenario::{MaterialsBy, TerrainSpec, ZoneSpec};
 use crate::sim::{simulate, Impact, Observer, Sample, SimParams, StopReason};
 use crate::source::measured_release;
-use crate::terrain::{horizontal_to_local, Material, Terrain};
+use crate::terrain::{horizontal_to_local, Material, Terrain, UpAxis};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -39,9 +39,22 @@ pub struct Model3d {
     files: Option<(std::path::PathBuf, TerrainSpec)>,
 }
 
+/// The terrain as messages name it: `the terrain, which spans x [a, b] and y [c, d]`, its horizontal extent in the
+/// campaign's (the files') frame.
+fn terrain_extent(terrain: &Terrain) -> String {
+    let (x0, y0, x1, y1) = terrain.surface.bounds_xy();
+    let [a, b] = [[x0, y0], [x1, y1]].map(|[x, y]| terrain.to_file_frame(&Vector3::new(x, y, 0.0)));
+    let (k, name) = match terrain.up {
+        UpAxis::Z => (1, "y"),
+        UpAxis::Y => (2, "z"),
+    };
+    let range = |i: usize| format!("[{}, {}]", a[i].min(b[i]), a[i].max(b[i]));
+    format!("the terrain, which spans x {} and {name} {}", range(0), range(k))
+}
+
 impl Model3d {
     /// Reads the terrain file and builds the blocks of `campaign` for its `runs`. `source` names the settings
-    /// file in errors.
+    /// file in errors. A rest point not over the terrain is refused ([`Campaign::check_rest_points`]).
     pub fn new(
         campaign: &Campaign,
         runs: Vec<FieldRun>,
@@ -107,6 +120,14 @@ impl Model3d {
         let mut model = Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)?
             .with_release_attempts(cfg.release_attempts)
             .with_rest_noise(cfg.rest_noise_m);
+        let terrain = &model.terrain;
+        campaign.check_rest_points(
+            |p| {
+                let q = terrain.up.to_internal(p) - terrain.origin;
+                terrain.surface.at(q.x, q.y).is_some()
+            },
+            &terrain_extent(terrain),
+        )?;
         model.files = Some((campaign.dir.clone(), spec));
         Ok(model
             .with_tracks(&campaign.tracks, cfg.track_noise_m)?

@@ -19,6 +19,8 @@ const SPLIT_STREAM: u64 = u64::MAX - 1000;
 /// it. Every id must be a run with an observed rest point.
 pub fn read_holdout(path: &Path, runs: &[FieldRun]) -> Result<Vec<usize>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    // A leading byte-order mark (editors on Windows write one) is not part of the first id.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut out = Vec::new();
     for (k, line) in text.lines().enumerate() {
         let id = line.split('#').next().unwrap_or("").trim();

@@ -6,6 +6,11 @@ use std::path::Path;
 
 /// A CSV file read whole: its header and its rows, fields trimmed, rows of empty fields skipped, each row with
 /// the file line it came from, so that every reader names the line of a bad value the same way.
+///
+/// Every row has one field per header column: a row with more or fewer is refused (a decimal comma, `77,17`, or
+/// an unquoted comma in a text would otherwise shift the values into the wrong columns). A quoted field
+/// (`"a, b"`) is one field. One extra empty field at the end of a row (a trailing comma) holds no value and is
+/// dropped. A header of one column holding `;` is refused: the file is semicolon-separated.
 #[derive(Debug)]
 pub struct Table {
     /// The file (or other source) the table came from, for error messages.
@@ -21,7 +26,7 @@ pub struct Table {
 pub struct Row {
     /// 1-based line in the file.
     pub line: usize,
-    /// Fields, trimmed; a row may have fewer or more than the header.
+    /// Fields, trimmed; one per header column.
     pub fields: Vec<String>,
 }
 
@@ -38,7 +43,8 @@ impl Table {
     /// Parses CSV `text`; `source` names it in errors.
     ///
     /// # Errors
-    /// CSV syntax errors naming `source` and the line.
+    /// CSV syntax errors naming `source` and the line; a semicolon-separated header; a row with more or fewer
+    /// fields than the header (see [`Table`]).
     pub fn parse(text: &[u8], source: &str, comments: bool) -> Result<Table> {
         let lines = Lines::new(text, comments);
         let syntax = |e: csv::Error| match lines.of(e.position()) {
@@ -50,12 +56,15 @@ impl Table {
             .flexible(true)
             .comment(comments.then_some(b'#'))
             .from_reader(text);
-        let header = rdr.headers().map_err(syntax)?.iter().map(str::to_string).collect();
+        let header: Vec<String> = rdr.headers().map_err(syntax)?.iter().map(str::to_string).collect();
+        semicolon_header(&header, source)?;
         let mut rows = Vec::new();
         for rec in rdr.records() {
             let rec = rec.map_err(syntax)?;
             if rec.iter().any(|f| !f.is_empty()) {
-                rows.push(Row { line: lines.of(rec.position()), fields: rec.iter().map(str::to_string).collect() });
+                let mut row = Row { line: lines.of(rec.position()), fields: rec.iter().map(str::to_string).collect() };
+                check_field_count(&mut row, header.len(), source)?;
+                rows.push(row);
             }
         }
         Ok(Table { source: source.to_string(), header, rows })
@@ -86,7 +95,7 @@ impl Table {
         Error::at_line(&self.source, row.line, message, hint)
     }
 
-    /// The field of column `col` in `row`; empty when there is no such column or the row is short.
+    /// The field of column `col` in `row`; empty when there is no such column.
     pub fn field<'r>(&self, row: &'r Row, col: Option<usize>) -> &'r str {
         col.and_then(|c| row.fields.get(c)).map_or("", String::as_str)
     }
@@ -127,6 +136,39 @@ impl Table {
             _ => Ok(None),
         }
     }
+}
+
+/// Refuses a header that is one column holding `;`: the file uses `;` as separator (as spreadsheets do where the
+/// decimal mark is a comma), and talus reads commas.
+fn semicolon_header(header: &[String], source: &str) -> Result<()> {
+    match header {
+        [only] if only.contains(';') => Err(Error::at_line(
+            source,
+            1,
+            format!("the header `{only}` has `;` and no `,`: the file seems to use `;` as separator"),
+            "talus reads commas: save the file as CSV with `,` between fields and `.` as the decimal mark",
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Drops one trailing empty field of `row` beyond the `columns` of the header (a trailing comma), then refuses a
+/// row whose field count differs from the header's, naming `source` and the line.
+fn check_field_count(row: &mut Row, columns: usize, source: &str) -> Result<()> {
+    if row.fields.len() == columns + 1 && row.fields.last().is_some_and(String::is_empty) {
+        row.fields.pop();
+    }
+    let n = row.fields.len();
+    if n == columns {
+        return Ok(());
+    }
+    let hint = if n > columns {
+        "a decimal comma or an unquoted comma in a field? Write decimals with a point (77.17) and put a field that \
+         holds a comma in double quotes"
+    } else {
+        "a missing field? Every row needs one field per column: leave an empty one as nothing between two commas"
+    };
+    Err(Error::at_line(source, row.line, format!("the row has {n} fields but the header has {columns} columns"), hint))
 }
 
 /// The lines of a CSV text, to name the line of a record (used by [`Table`]). The `csv` crate's own `Position::line` is one short after

@@ -67,7 +67,7 @@ use super::options::Options2d;
 use super::profile::Profile;
 use super::release::{Release2d, ValueRange};
 use super::slope::Slope2d;
-use crate::campaign::Campaign;
+use crate::campaign::{Campaign, Ground};
 use crate::error::{Error, Result};
 use crate::terrain::BenchGeometry;
 use serde::{Deserialize, Serialize};
@@ -343,7 +343,7 @@ fn campaign_starts(dir: &Path, repeats: usize, profile: &Profile) -> Result<Vec<
     if repeats == 0 {
         return Err(Error::invalid("campaign.repeats", "must be at least 1", "e.g. repeats = 20"));
     }
-    let campaign = Campaign::read(dir)?;
+    let campaign = Campaign::read_on(dir, Ground::Profile)?;
     let (x0, x1) = profile.x_range_m();
     let mut starts = Vec::new();
     for r in &campaign.releases {
@@ -421,7 +421,7 @@ mod tests {
             std::fs::write(d.join("block_metadata.csv"), "block_id,mass_kg,size_x_m,size_y_m,size_z_m\nb,500,1,1,1\n")
                 .unwrap();
         };
-        write("trajectory_id,x_m,z_m,vx_mps,block_id\nr1,10.2,200,1.5,b\nr2,10.4,200,2.0,b\n");
+        write("trajectory_id,x_m,z_m,vx_mps,vz_mps,block_id\nr1,10.2,200,1.5,0,b\nr2,10.4,200,2.0,0,b\n");
         let i = EXAMPLE.find("[release]").unwrap();
         let j = EXAMPLE[i..].find("\n[").map_or(EXAMPLE.len(), |k| i + k + 1);
         let without = format!("{}{}", &EXAMPLE[..i], &EXAMPLE[j..]);
@@ -448,7 +448,7 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("release") && e.contains("beside"), "{e}");
-        write("trajectory_id,x_m,y_m,z_m,block_id\nr1,10.2,3,200,b\n");
+        write("trajectory_id,x_m,y_m,z_m,vx_mps,vz_mps,block_id\nr1,10.2,3,200,0,0,b\n");
         let e = scenario("", "[campaign]\ndir = \".\"\n").unwrap_err().to_string();
         assert!(e.contains("run r1") && e.contains("y = 3"), "{e}");
     }

@@ -1,0 +1,231 @@
+//! Bad field-campaign input is refused with the file, the line and the fix: rows with the wrong number of fields,
+//! semicolon-separated files, repeated ids, missing velocity or `y_m` columns, negative run-outs, rest points off
+//! the terrain or profile, and a BOM in a `--holdout` file. Small campaigns in temp folders; no calibration runs.
+
+use std::path::{Path, PathBuf};
+use talus::calibrate::{open_model, CalibrationConfig, ModelKind};
+use talus::campaign::{Campaign, Ground};
+use tempfile::TempDir;
+
+const RELEASE_2D: &str = "trajectory_id,x_m,z_m,vx_mps,vz_mps,block_id\n\
+                          p001,5,45,1,0,b1\np002,6,44,1,0,b1\np003,7,43,1,0,b1\np004,8,42,1,0,b1\np005,9,41,1,0,b1\np006,10,40,1,0,b1\n";
+const DEPOSITION_2D: &str =
+    "trajectory_id,x_m,z_m\np001,60,20\np002,61,19.5\np003,62,19\np004,63,18.5\np005,64,18\np006,65,17.5\n";
+const PROFILE: &str = "x_m,z_m,material\n0,50,ground\n50,20,ground\n100,10,ground\n";
+const RELEASE_3D: &str = "trajectory_id,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,block_id\n\
+                          r1,10,20,12,0,0,0,b1\nr2,12,20,12,0,0,0,b1\nr3,14,20,12,0,0,0,b1\nr4,16,20,12,0,0,0,b1\nr5,18,20,12,0,0,0,b1\nr6,20,20,12,0,0,0,b1\n";
+const DEPOSITION_3D: &str =
+    "trajectory_id,x_m,y_m,z_m\nr1,30,20,1\nr2,31,20,1\nr3,32,20,1\nr4,33,20,1\nr5,34,20,1\nr6,35,20,1\n";
+const BLOCKS: &str = "block_id,mass_kg,size_x_m,size_y_m,size_z_m\nb1,50,0.3,0.3,0.3\n";
+
+/// A campaign folder with the release, rest-point and block files given (and the profile of the 2D campaigns).
+fn campaign(release: &str, deposition: &str, blocks: &str) -> TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("release_points.csv"), release).unwrap();
+    std::fs::write(d.join("observed_deposition.csv"), deposition).unwrap();
+    std::fs::write(d.join("block_metadata.csv"), blocks).unwrap();
+    std::fs::write(d.join("profile.csv"), PROFILE).unwrap();
+    dir
+}
+
+/// The error reading the campaign in `dir` on `ground`.
+fn error_on(dir: &TempDir, ground: Ground) -> String {
+    match Campaign::read_on(dir.path(), ground) {
+        Ok(_) => panic!("the campaign in {} was read", dir.path().display()),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// A 50 m × 50 m level grid (ESRI ASCII, z = 0, cells of 5 m from (0, 0)) in `dir`.
+fn flat_grid(dir: &Path) -> PathBuf {
+    let row = ["0"; 11].join(" ");
+    let rows = vec![row; 11].join("\n");
+    let path = dir.join("flat.asc");
+    std::fs::write(
+        &path,
+        format!("ncols 11\nnrows 11\nxllcorner 0\nyllcorner 0\ncellsize 5\nNODATA_value -9999\n{rows}\n"),
+    )
+    .unwrap();
+    path
+}
+
+/// The error opening the campaign in `dir` on `terrain` as a `kind` model.
+fn model_error(dir: &Path, terrain: &Path, kind: ModelKind) -> String {
+    match open_model(dir, terrain, kind, &CalibrationConfig::default(), "settings") {
+        Ok(_) => panic!("the campaign in {} was opened", dir.display()),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn a_row_with_more_fields_than_the_header_is_refused_naming_the_line_and_the_counts() {
+    // A decimal comma: x = 3,588455909518455 was read as x = 3, z = 588455909518455.
+    let dep = "trajectory_id,x_m,z_m\np001,60,20\np002,3,588455909518455,77.17\n";
+    let d = campaign(RELEASE_2D, dep, BLOCKS);
+    let e = error_on(&d, Ground::Profile);
+    assert!(e.contains("observed_deposition.csv:3"), "{e}");
+    assert!(e.contains("4 fields") && e.contains("3 columns"), "{e}");
+    assert!(e.contains("a decimal comma or an unquoted comma in a field?"), "{e}");
+}
+
+#[test]
+fn a_row_with_fewer_fields_than_the_header_is_refused_naming_the_line_and_the_counts() {
+    let release = RELEASE_2D.replace("p003,7,43,1,0,b1", "p003,7,43,1,b1");
+    let d = campaign(&release, DEPOSITION_2D, BLOCKS);
+    let e = error_on(&d, Ground::Profile);
+    assert!(e.contains("release_points.csv:4") && e.contains("5 fields") && e.contains("6 columns"), "{e}");
+}
+
+#[test]
+fn a_quoted_comma_is_one_field_and_a_trailing_comma_adds_none() {
+    let blocks = "block_id,name,mass_kg,size_x_m,size_y_m,size_z_m\nb1,\"St. Leonard, small\",50,0.3,0.3,0.3,\n";
+    let dep = DEPOSITION_2D.replace("p002,61,19.5", "p002,61,19.5,");
+    let d = campaign(RELEASE_2D, &dep, blocks);
+    let c = Campaign::read_on(d.path(), Ground::Profile).unwrap();
+    assert_eq!(c.blocks["b1"].name, "St. Leonard, small");
+    assert_eq!(c.blocks["b1"].mass_kg, 50.0);
+    assert_eq!(c.depositions["p002"].position_m, [61.0, 0.0, 19.5]);
+    // Two trailing fields are one too many, even empty.
+    let d = campaign(RELEASE_2D, &DEPOSITION_2D.replace("p002,61,19.5", "p002,61,19.5,,"), BLOCKS);
+    let e = error_on(&d, Ground::Profile);
+    assert!(e.contains("observed_deposition.csv:3") && e.contains("5 fields"), "{e}");
+}
+
+#[test]
+fn a_semicolon_separated_file_is_named_as_such() {
+    let release = RELEASE_2D.replace(',', ";");
+    let d = campaign(&release, DEPOSITION_2D, BLOCKS);
+    let e = error_on(&d, Ground::Profile);
+    assert!(e.contains("release_points.csv:1") && e.contains("`;` as separator") && e.contains("commas"), "{e}");
+}
+
+#[test]
+fn a_repeated_rest_point_or_block_is_refused_naming_both_lines() {
+    let dep = format!("{DEPOSITION_2D}p002,70,15\n");
+    let d = campaign(RELEASE_2D, &dep, BLOCKS);
+    let e = error_on(&d, Ground::Profile);
+    assert!(e.contains("observed_deposition.csv:8") && e.contains("'p002' appears twice"), "{e}");
+    assert!(e.contains("lines 3 and 8"), "{e}");
+    let blocks = format!("{BLOCKS}b2,60,0.3,0.3,0.3\nb1,70,0.4,0.4,0.4\n");
+    let d = campaign(RELEASE_2D, DEPOSITION_2D, &blocks);
+    let e = error_on(&d, Ground::Profile);
+    assert!(
+        e.contains("block_metadata.csv:4") && e.contains("'b1' appears twice") && e.contains("lines 2 and 4"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_release_file_without_a_velocity_column_is_refused() {
+    for (column, ground) in [("vx_mps", Ground::Profile), ("vz_mps", Ground::Profile), ("vy_mps", Ground::Terrain)] {
+        let release = if ground == Ground::Profile { RELEASE_2D } else { RELEASE_3D };
+        let renamed = release.replacen(column, "speed", 1);
+        let deposition = if ground == Ground::Profile { DEPOSITION_2D } else { DEPOSITION_3D };
+        let d = campaign(&renamed, deposition, BLOCKS);
+        let e = error_on(&d, ground);
+        assert!(e.contains("release_points.csv:1") && e.contains(&format!("`{column}`")), "{e}");
+        assert!(e.contains("found: trajectory_id,") && e.contains("speed"), "{e}");
+        assert!(e.contains("0 for a block dropped at rest"), "{e}");
+    }
+    // A profile campaign needs no vy_mps (nor y_m).
+    let d = campaign(RELEASE_2D, DEPOSITION_2D, BLOCKS);
+    let c = Campaign::read_on(d.path(), Ground::Profile).unwrap();
+    assert_eq!(c.releases[0].velocity_mps, [1.0, 0.0, 0.0]);
+}
+
+#[test]
+fn a_terrain_campaign_without_y_m_is_refused_and_a_profile_campaign_may_omit_it() {
+    let dep = "trajectory_id,x_m,z_m\nr1,30,1\nr2,31,1\nr3,32,1\nr4,33,1\nr5,34,1\nr6,35,1\n";
+    let d = campaign(RELEASE_3D, dep, BLOCKS);
+    let e = error_on(&d, Ground::Terrain);
+    assert!(e.contains("observed_deposition.csv:1") && e.contains("`y_m`") && e.contains("3D terrain"), "{e}");
+    let release = RELEASE_3D.replacen("y_m,", "", 1).replace(",20,12,", ",12,");
+    let d = campaign(&release, DEPOSITION_3D, BLOCKS);
+    let e = error_on(&d, Ground::Terrain);
+    assert!(e.contains("release_points.csv:1") && e.contains("`y_m`"), "{e}");
+    // The ground read from the release file: y_m makes it a terrain campaign.
+    let d = campaign(RELEASE_3D, dep, BLOCKS);
+    let e = Campaign::read(d.path()).unwrap_err().to_string();
+    assert!(e.contains("observed_deposition.csv:1") && e.contains("`y_m`"), "{e}");
+    let d = campaign(RELEASE_2D, DEPOSITION_2D, BLOCKS);
+    assert_eq!(Campaign::read(d.path()).unwrap().depositions["p001"].position_m, [60.0, 0.0, 20.0]);
+}
+
+#[test]
+fn a_negative_observed_runout_is_refused() {
+    let dep = "trajectory_id,x_m,z_m,observed_runout_m\np001,60,20,55\np002,61,19.5,-55\n";
+    let d = campaign(RELEASE_2D, dep, BLOCKS);
+    let e = error_on(&d, Ground::Profile);
+    assert!(e.contains("observed_deposition.csv:3") && e.contains("observed_runout_m") && e.contains("-55"), "{e}");
+}
+
+#[test]
+fn a_rest_point_off_the_terrain_is_refused_naming_the_point_and_the_extent() {
+    let d = campaign(RELEASE_3D, DEPOSITION_3D, BLOCKS);
+    let grid = flat_grid(d.path());
+    open_model(d.path(), &grid, ModelKind::Rigid3d, &CalibrationConfig::default(), "settings").unwrap();
+    let d = campaign(RELEASE_3D, &DEPOSITION_3D.replace("r3,32,20,1", "r3,32,80,1"), BLOCKS);
+    let grid = flat_grid(d.path());
+    let e = model_error(d.path(), &grid, ModelKind::Rigid3d);
+    assert!(e.contains("observed_deposition.csv:4") && e.contains("r3") && e.contains("[32.0, 80.0, 1.0]"), "{e}");
+    assert!(e.contains("not over the terrain") && e.contains("x [") && e.contains("y ["), "{e}");
+}
+
+#[test]
+fn a_rest_point_off_the_profile_is_refused_naming_the_point_and_the_x_range() {
+    let d = campaign(RELEASE_2D, DEPOSITION_2D, BLOCKS);
+    let profile = d.path().join("profile.csv");
+    open_model(d.path(), &profile, ModelKind::Lumped2d, &CalibrationConfig::default(), "settings").unwrap();
+    let d = campaign(RELEASE_2D, &DEPOSITION_2D.replace("p004,63,18.5", "p004,130,5"), BLOCKS);
+    let e = model_error(d.path(), &d.path().join("profile.csv"), ModelKind::Lumped2d);
+    assert!(e.contains("observed_deposition.csv:5") && e.contains("p004") && e.contains("130"), "{e}");
+    assert!(e.contains("x range is [0, 100]"), "{e}");
+}
+
+#[test]
+fn the_shipped_and_written_campaigns_still_read() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let cfg = CalibrationConfig::default();
+    let tschamut = root.join("meshes/tschamut2014");
+    assert_eq!(Campaign::read_on(&tschamut, Ground::Terrain).unwrap().depositions.len(), 80);
+    open_model(&tschamut, &tschamut.join("terrain_proxy.asc"), ModelKind::Rigid3d, &cfg, "settings").unwrap();
+    for folder in ["profile_campaign", "profile_campaign_tracked"] {
+        let dir = root.join("examples").join(folder);
+        assert!(!Campaign::read_on(&dir, Ground::Profile).unwrap().depositions.is_empty(), "{folder}");
+        open_model(&dir, &dir.join("profile.csv"), ModelKind::Lumped2d, &cfg, "settings").unwrap();
+    }
+    use talus::calibrate::synthetic::{case_2d, case_3d, write_profile_campaign, write_terrain_campaign};
+    let dir = tempfile::tempdir().unwrap();
+    let spec = talus::calibrate::synthetic::Synthetic2d { runs_per_group: 2, ..case_2d("speed_tracked", 1).unwrap() };
+    write_profile_campaign(&spec, dir.path()).unwrap();
+    open_model(dir.path(), &dir.path().join("profile.csv"), ModelKind::Lumped2d, &cfg, "settings").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let spec = talus::calibrate::synthetic::Synthetic3d { runs_per_group: 2, ..case_3d("speed", 1).unwrap() };
+    write_terrain_campaign(&spec, dir.path(), 0.0).unwrap();
+    open_model(dir.path(), &dir.path().join("terrain.obj"), ModelKind::Rigid3d, &cfg, "settings").unwrap();
+}
+
+#[test]
+fn a_holdout_file_starting_with_a_byte_order_mark_is_read() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign");
+    let dir = tempfile::tempdir().unwrap();
+    let ids = dir.path().join("ids.txt");
+    // The first id is read past the BOM; the unknown second one stops the command before any calibration.
+    std::fs::write(&ids, "\u{feff}p001\nnot_a_run\n").unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
+        .arg("calibrate")
+        .arg(&root)
+        .arg("--terrain")
+        .arg(root.join("profile.csv"))
+        .args(["--model", "2dlm", "--holdout"])
+        .arg(&ids)
+        .arg("--out")
+        .arg(dir.path().join("out"))
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(stderr.contains("ids.txt:2") && stderr.contains("not_a_run"), "{stderr}");
+    assert!(!stderr.contains("ids.txt:1"), "{stderr}");
+}
