@@ -348,7 +348,8 @@ impl ScenarioFile {
             Error::format(
                 location,
                 e.message().to_string(),
-                "see the scenario format in README.md (every key is listed there); keys are case-sensitive",
+                "see the scenario format in README.md, \"Scenario files\" ([[collectors]], [hazard_zones] and \
+                 [barrier_design] in docs/barrier.md); keys are case-sensitive",
             )
         })
     }

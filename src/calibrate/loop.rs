@@ -395,9 +395,10 @@ pub fn effects_loop(
         let Passed { trial, full: chosen, free: refit_free, added_parameters, .. } = passed.swap_remove(pick.kept);
         if !rivals.is_empty() {
             (ctx.log)(&format!(
-                "effects loop, round {round}: {} effects pass; {} kept ({added_parameters} added parameters{})",
+                "effects loop, round {round}: {} effects pass; {} kept ({added_parameters} added parameter{}{})",
                 rivals.len() + 1,
                 trial.label,
+                if added_parameters == 1 { "" } else { "s" },
                 if pick.simpler_than_best {
                     ", the simplest within one standard error of the best"
                 } else {

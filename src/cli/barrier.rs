@@ -4,6 +4,7 @@ use super::progress;
 use anyhow::Context;
 use clap::Args;
 use std::path::PathBuf;
+use talus::barrier::classes::thousands;
 use talus::barrier::report::floor_sentence;
 use talus::barrier::{propose_models, Status};
 use talus::scenario::ScenarioFile;
@@ -114,13 +115,13 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
     );
     for x in ranked.iter().take(sc.file.barrier_design.best) {
         say!(
-            "{:>3}  {:<34} {:>6.0} m {:>7.1} m {:>7.0} kJ {:>7.0} kJ  {:<16} {:>7.1}% {:>8}",
+            "{:>3}  {:<34} {:>6.1} m {:>7.1} m {:>7} kJ {:>7} kJ  {:<16} {:>7.1}% {:>8}",
             x.rank.unwrap_or(0),
             x.name,
             x.length_m,
             x.fence_height_m,
-            x.energy_p95_kj,
-            x.energy_max_kj,
+            thousands(x.energy_p95_kj),
+            thousands(x.energy_max_kj),
             x.class_label,
             100.0 * x.share,
             x.cost.map_or("-".to_string(), |c| format!("{c:.0}"))
@@ -154,7 +155,7 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
             "with {} ({} m, {} kJ){of}: rocks reaching the protected zone {} ({:.1} %) -> {} ({:.1} %); caught {}, through {}, over {}, around {}",
             b.name.as_deref().unwrap_or("the barrier"),
             b.height_m,
-            b.capacity_kj,
+            thousands(b.capacity_kj),
             r.reaching_without,
             100.0 * r.probability_without(),
             r.reaching_with,

@@ -14,8 +14,8 @@ use talus::benches::{run_benches, spread_statement, Model, StudyConfig};
 /// study counts the rocks captured on each bench and compares first-bench capture with the Modified Ritchie
 /// Criterion (BW = 0.2 x BH + 4.5 m), the 90 % retention target and, with --records, a mine's historic events.
 /// Without --config it runs the paper's study: 20 m benches, 5 benches, faces 45/60/75 degrees, widths 4-10 m,
-/// 300 2DLM runs per configuration and mass, 90 3DRB runs per configuration. Flags override the config file (format: talus::benches::config,
-/// commented example: examples/benches_quick.toml). Writes capture.csv, rocks.csv, figure7_*.svg,
+/// 300 2DLM runs per configuration and mass, 90 3DRB runs per configuration. Flags override the config file (every key:
+/// docs/benches.md; commented example: examples/benches_quick.toml). Writes capture.csv, rocks.csv, figure7_*.svg,
 /// per_bench/figure6_*.svg, summary.json and report.md (and spread.csv with --repeats, records_capture.csv with
 /// --records).
 ///

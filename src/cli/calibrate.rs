@@ -52,8 +52,8 @@ pub struct CalibrateArgs {
     #[arg(long)]
     threads: Option<usize>,
     /// Outer k-fold cross-validation over all runs (K folds; `--kfold` alone uses outer_folds from the settings).
-    #[arg(long, num_args = 0..=1, default_missing_value = "0")]
-    kfold: Option<usize>,
+    #[arg(long, num_args = 0..=1)]
+    kfold: Option<Option<usize>>,
     /// Repeat the k-fold study R times with seeds seed, seed+1, ... and report mean ± sd (overrides outer_repeats).
     #[arg(long, requires = "kfold")]
     kfold_repeats: Option<usize>,
@@ -83,7 +83,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         .with_context(|| format!("reading {}", a.campaign.display()))?;
     let runs = model.runs();
     // Every input is checked before the output folder is made.
-    let kfold = a.kfold.map(|k| if k == 0 { cfg.outer_folds } else { k });
+    let kfold = a.kfold.map(|k| k.unwrap_or(cfg.outer_folds));
     if let Some(k) = kfold {
         if a.holdout.is_some() {
             anyhow::bail!("--kfold and --holdout exclude each other: the k-fold study holds out every run once");

@@ -5,7 +5,11 @@ use std::path::PathBuf;
 use talus::terrain::BenchGeometry;
 
 /// Write generated terrains.
+///
+/// Example:
+///   talus mesh bench --out outputs/bench_stack.obj
 #[derive(Debug, Args)]
+#[command(verbatim_doc_comment)]
 pub struct MeshArgs {
     #[command(subcommand)]
     kind: MeshKind,
@@ -16,8 +20,9 @@ enum MeshKind {
     /// The seed paper's benched slope, as an OBJ with `face` and `floor` groups (or a 2D profile CSV with --2d).
     ///
     /// Example:
-    ///   talus mesh bench --out meshes/bench_stack/bench_stack.obj
+    ///   talus mesh bench --out outputs/bench_stack.obj
     ///   talus mesh bench --face-angle-deg 75 --bench-width-m 9 --2d --out outputs/bench75.csv
+    #[command(verbatim_doc_comment)]
     Bench(BenchArgs),
 }
 

@@ -8,8 +8,8 @@ use talus::lumped2d::{run_profile, ProfileScenario};
 /// Run a 2D lumped-mass (2DLM) profile scenario: end points, envelopes of bounce height, speed and kinetic energy
 /// along the profile, and what passes the vertical collectors.
 ///
-/// The scenario format is documented in talus::lumped2d::scenario (examples/profile_bench.toml is a commented
-/// example). Writes endpoints.csv, envelopes.csv, collectors.csv, profile.csv and summary.json.
+/// Every key of the scenario is shown, with its unit and default, in the commented examples/profile_bench.toml
+/// (README.md, "Other commands"). Writes endpoints.csv, envelopes.csv, collectors.csv, profile.csv and summary.json.
 ///
 /// Example:
 ///   talus profile examples/profile_bench.toml --out outputs/profile_bench --rocks 1000 --seed 7

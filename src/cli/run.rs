@@ -49,14 +49,16 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     let summary = run_scenario(&sc, &overrides, &a.out, &progress)
         .with_context(|| format!("running {}", a.scenario.display()))?;
     pb.finish_and_clear();
+    let reason = |r: &str| summary.stop_reasons.get(r).copied().unwrap_or(0);
     say!(
-        "{} rocks in {:.1} s ({:.0} rocks/s): {} stopped, {} left the terrain, {} hit the time limit",
+        "{} rocks in {:.1} s ({:.0} rocks/s): {} stopped, {} left the terrain, {} hit the time limit{}",
         summary.rocks,
         summary.wall_time_s,
         summary.rocks_per_second,
-        summary.stop_reasons.get("stopped").copied().unwrap_or(0),
-        summary.stop_reasons.get("left_terrain").copied().unwrap_or(0),
-        summary.stop_reasons.get("max_time").copied().unwrap_or(0)
+        reason("stopped"),
+        reason("left_terrain"),
+        reason("max_time"),
+        if reason("barrier") > 0 { format!(", {} caught by a barrier", reason("barrier")) } else { String::new() }
     );
     say!(
         "run-out median {:.1} m (P95 {:.1} m, max {:.1} m); largest kinetic energy P95 {:.1} kJ",
@@ -70,12 +72,12 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     }
     for c in &summary.collectors {
         say!(
-            "collector {}: {} rocks crossed ({:.1} %), kinetic energy P95 {:.1} kJ, passing height P95 {:.2} m",
+            "collector {}: {} rocks crossed ({:.1} %), kinetic energy P95 {} kJ, passing height P95 {} m",
             c.name,
             c.rocks_crossing,
             100.0 * c.fraction_crossing,
-            c.kinetic_kj_p95.unwrap_or(f64::NAN),
-            c.passing_height_m_p95.unwrap_or(f64::NAN)
+            c.kinetic_kj_p95.map_or("-".into(), |v| format!("{v:.1}")),
+            c.passing_height_m_p95.map_or("-".into(), |v| format!("{v:.2}"))
         );
     }
     say!(

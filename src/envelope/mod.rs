@@ -238,7 +238,8 @@ fn check_frames_before(models: &[(Scenario, String)]) -> Result<()> {
         (files, serde_json::to_string(&terrain).unwrap_or_default(), sc.file.output.cell_size_m.to_bits())
     };
     let frame = |sc: &Scenario| -> Result<Grid> {
-        Ok(RasterFrame::covering(&crate::run::load_terrain(sc)?, sc.file.output.cell_size_m).empty_grid())
+        let field = format!("{}: output.cell_size_m", sc.path.display());
+        Ok(RasterFrame::covering(&crate::run::load_terrain(sc)?, sc.file.output.cell_size_m, &field)?.empty_grid())
     };
     let (first, first_name) = &models[0];
     let first_key = key(first);
