@@ -726,6 +726,10 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("bad.txt:2") && err.contains("nope"), "{err}");
     assert!(!bad_out.exists());
+    // --kfold 0 is no number of folds (--kfold alone takes the settings'): exit 2, before any work.
+    let o = run(&["--kfold", "0", "--out", bad_out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--kfold") && !bad_out.exists());
     // An unknown settings key: exit 2, named.
     std::fs::write(d.join("settings.toml"), "repeatz = 3\n").unwrap();
     let o = run(&["--out", out.to_str().unwrap()]);

@@ -621,3 +621,28 @@ fn models_carried_to_a_site_run_with_the_sites_terrain_rocks_and_seed_and_their_
     let drag = sc.file.simulation.params.effects.vegetation_drag_kg_s;
     assert!(drag.is_some_and(|c| (c - 8.169).abs() < 1e-3), "the model's effects travel: {drag:?}");
 }
+
+/// A profile scenario given to a 3D command, or a 3D scenario to `talus profile`, is refused by its kind (exit 2,
+/// naming the command to use), not by its first unknown key.
+#[test]
+fn a_scenario_of_the_other_kind_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o");
+    let root = env!("CARGO_MANIFEST_DIR");
+    let (profile, rigid) = (format!("{root}/examples/profile_bench.toml"), format!("{root}/examples/bench_stack.toml"));
+    for (args, needle) in [
+        (vec!["run", &profile], "talus profile"),
+        (vec!["barrier", &profile], "talus profile"),
+        (vec!["envelope", &rigid, &profile], "talus profile"),
+        (vec!["profile", &rigid], "talus run"),
+    ] {
+        let o = talus().args(&args).arg("--out").arg(&out).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains(needle) && err.contains("how to fix") && !err.contains("unknown field"),
+            "{args:?}: {err}"
+        );
+        assert!(!out.exists(), "{args:?} wrote {}", out.display());
+    }
+}

@@ -7,7 +7,6 @@ use std::path::PathBuf;
 use talus::barrier::classes::thousands;
 use talus::barrier::report::floor_sentence;
 use talus::barrier::{propose_models, Status};
-use talus::scenario::ScenarioFile;
 
 /// Propose rockfall barrier positions: candidate lines (contours, bench crests and toes, offsets of a toe or asset
 /// line) are sized from one run (length to intercept the target share of rocks, fence height, energy class, cost)
@@ -59,7 +58,7 @@ pub struct BarrierArgs {
 
 pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
     a.control.check()?;
-    let mut file = ScenarioFile::read(&a.scenario)?;
+    let mut file = super::read_3d(&a.scenario, "barrier")?;
     if let Some(t) = a.target_share {
         file.barrier_design.target_share = t;
     }
@@ -75,7 +74,7 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
         .resolve(&a.scenario)
         .map_err(|e| anyhow::anyhow!("{e}\n  (command-line values are checked as barrier_design.* keys)"))?;
     // The models take the site as written (its paths relative to the scenario file), not as resolved.
-    let mut models = super::load_models(&a.models, Some((&file, &a.scenario)))?;
+    let mut models = super::load_models(&a.models, Some((&file, &a.scenario)), "barrier --models")?;
     if models.is_empty() {
         models.push(("scenario".to_string(), sc.clone()));
     }

@@ -6,8 +6,6 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use talus::envelope::profile::run_profile_envelope;
 use talus::envelope::{model_names, run_envelope};
-use talus::lumped2d::ProfileScenario;
-use talus::scenario::ScenarioFile;
 
 /// Run several scenarios of one terrain with the same seed and combine their hazard rasters cell by cell: the
 /// lowest, median and highest value over the models (GeoTIFF and PNG), and how many models' rocks reach each
@@ -50,11 +48,11 @@ pub struct EnvelopeArgs {
 
 pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
     a.control.check()?;
-    if is_profile(&a.scenarios[0]) {
+    if super::is_profile(&a.scenarios[0]) {
         return run_profiles(&a);
     }
-    let site = a.site.as_ref().map(|p| ScenarioFile::read(p).map(|f| (f, p))).transpose()?;
-    let models = super::load_models(&a.scenarios, site.as_ref().map(|(f, p)| (f, p.as_path())))?;
+    let site = a.site.as_ref().map(|p| super::read_3d(p, "envelope --site").map(|f| (f, p))).transpose()?;
+    let models = super::load_models(&a.scenarios, site.as_ref().map(|(f, p)| (f, p.as_path())), "envelope")?;
     let scenarios: Vec<_> = (models.into_iter())
         .map(|(name, mut scenario)| {
             scenario.file.output.ascii_grids |= a.ascii_grids;
@@ -153,13 +151,6 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
 
 /// Whether `path` is a 2DLM profile scenario (it has a `profile` key); anything else is read as a 3D scenario,
 /// whose reader reports what is wrong with it.
-fn is_profile(path: &Path) -> bool {
-    std::fs::read_to_string(path)
-        .ok()
-        .and_then(|t| t.parse::<toml::Table>().ok())
-        .is_some_and(|t| t.contains_key("profile"))
-}
-
 /// `talus envelope` on 2DLM profile scenarios.
 fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
     if a.site.is_some() {
@@ -171,7 +162,7 @@ fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
     let paths: Vec<&Path> = a.scenarios.iter().map(PathBuf::as_path).collect();
     let mut scenarios = Vec::new();
     for (path, name) in paths.iter().zip(model_names(&paths)) {
-        let mut sc = ProfileScenario::load(path)?;
+        let mut sc = super::read_profile(path, "envelope")?;
         if let Some(n) = a.control.rocks {
             if sc.campaign.is_some() {
                 anyhow::bail!("--rocks: {} releases a campaign; set its [campaign] repeats instead", path.display());

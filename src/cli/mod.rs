@@ -52,15 +52,16 @@ impl RunControl {
 
 /// The named models of `paths` (names by [`talus::envelope::model_names`]), each read and resolved, or, with a
 /// `site` (its file and path), carried onto it by [`talus::envelope::on_site`] (`talus envelope --site`,
-/// `talus barrier --models`).
+/// `talus barrier --models`); `command` names the command in messages.
 pub fn load_models(
     paths: &[std::path::PathBuf],
     site: Option<(&talus::scenario::ScenarioFile, &std::path::Path)>,
+    command: &str,
 ) -> anyhow::Result<Vec<(String, talus::scenario::Scenario)>> {
     let paths: Vec<&std::path::Path> = paths.iter().map(|p| p.as_path()).collect();
     let mut models = Vec::new();
     for (path, name) in paths.iter().zip(talus::envelope::model_names(&paths)) {
-        let model = talus::scenario::ScenarioFile::read(path)?;
+        let model = read_3d(path, command)?;
         let scenario = match site {
             None => model.resolve(path)?,
             Some((site, site_path)) => {
@@ -70,6 +71,39 @@ pub fn load_models(
         models.push((name, scenario));
     }
     Ok(models)
+}
+
+/// True if the scenario file at `path` is a 2DLM profile scenario (it has a `profile` key).
+pub fn is_profile(path: &std::path::Path) -> bool {
+    std::fs::read_to_string(path)
+        .ok()
+        .and_then(|t| t.parse::<toml::Table>().ok())
+        .is_some_and(|t| t.contains_key("profile"))
+}
+
+/// Reads a 3D scenario for `talus COMMAND`, refusing a profile scenario by name rather than by its first unknown key.
+pub fn read_3d(path: &std::path::Path, command: &str) -> anyhow::Result<talus::scenario::ScenarioFile> {
+    if is_profile(path) {
+        anyhow::bail!(
+            "{}: a 2DLM profile scenario (it has `profile`), while `talus {command}` takes a 3D scenario (the format \
+             of `talus run`)\n  how to fix: run it with `talus profile`, or give a 3D scenario",
+            path.display()
+        );
+    }
+    Ok(talus::scenario::ScenarioFile::read(path)?)
+}
+
+/// Reads a 2DLM profile scenario for `talus COMMAND`, refusing a 3D scenario by name.
+pub fn read_profile(path: &std::path::Path, command: &str) -> anyhow::Result<talus::lumped2d::ProfileScenario> {
+    let text = std::fs::read_to_string(path).ok().and_then(|t| t.parse::<toml::Table>().ok());
+    if text.is_some_and(|t| t.contains_key("terrain") && !t.contains_key("profile")) {
+        anyhow::bail!(
+            "{}: a 3D scenario (it has [terrain]), while `talus {command}` takes a 2DLM profile scenario\n  how to \
+             fix: run it with `talus run`, or give a profile scenario (examples/profile_bench.toml)",
+            path.display()
+        );
+    }
+    Ok(talus::lumped2d::ProfileScenario::load(path)?)
 }
 
 /// Refuses `--threads 0` and more than [`talus::parallel::MAX_THREADS`].

@@ -3,7 +3,7 @@
 use anyhow::Context;
 use clap::Args;
 use std::path::PathBuf;
-use talus::lumped2d::{run_profile, ProfileScenario};
+use talus::lumped2d::run_profile;
 
 /// Run a 2D lumped-mass (2DLM) profile scenario: end points, envelopes of bounce height, speed and kinetic energy
 /// along the profile, and what passes the vertical collectors.
@@ -26,7 +26,7 @@ pub struct ProfileArgs {
 
 pub fn run(a: ProfileArgs) -> anyhow::Result<()> {
     a.control.check()?;
-    let mut scenario = ProfileScenario::load(&a.scenario)?;
+    let mut scenario = super::read_profile(&a.scenario, "profile")?;
     if let Some(n) = a.control.rocks {
         if scenario.campaign.is_some() {
             anyhow::bail!("--rocks: {} releases a campaign; set its [campaign] repeats instead", a.scenario.display());

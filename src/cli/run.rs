@@ -5,7 +5,6 @@ use anyhow::Context;
 use clap::Args;
 use std::path::PathBuf;
 use talus::run::run_scenario;
-use talus::scenario::ScenarioFile;
 
 /// Run a 3D rigid-body rockfall scenario and write end points, hazard rasters (GeoTIFF, PNG maps), hazard zones,
 /// collector tables, a run manifest and index.html.
@@ -33,7 +32,7 @@ pub struct RunArgs {
 
 pub fn run(a: RunArgs) -> anyhow::Result<()> {
     a.control.check()?;
-    let mut sc = ScenarioFile::read(&a.scenario)?.resolve(&a.scenario)?;
+    let mut sc = super::read_3d(&a.scenario, "run")?.resolve(&a.scenario)?;
     sc.file.output.ascii_grids |= a.ascii_grids;
     let overrides = a.control.overrides(a.paths);
     let pb = progress::bar(0, "rocks");
