@@ -295,6 +295,14 @@ fn bad_input_is_answered_with_where_what_and_how() {
     fails_cleanly(d, &scenario(d, "", 0.3, "-5.0"), &["rocks.mass_kg", "-5"]);
     // An unknown key.
     fails_cleanly(d, &scenario(d, "colour = \"red\"", 0.3, "300.0"), &["scenario.toml:", "unknown field `colour`"]);
+    // A material zone off the terrain.
+    let zone = "[[terrain.zones]]\nmaterial = \"default\"\npolygon = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]\n";
+    fails_cleanly(d, &scenario(d, zone, 0.3, "300.0"), &["terrain.zones[0].polygon", "no triangle"]);
+    // A collector line off the terrain (coordinates in another frame), and two collectors of one name.
+    let off = "[[collectors]]\nname = \"c\"\nline = [[0.0, 0.0], [10.0, 0.0]]\n";
+    fails_cleanly(d, &scenario(d, off, 0.3, "300.0"), &["collectors[0] (c)", "no point of the line"]);
+    let on = "[[collectors]]\nname = \"c\"\nline = [[500044.0, 5000000.0], [500044.0, 5000040.0]]\n";
+    fails_cleanly(d, &scenario(d, &format!("{on}{on}"), 0.3, "300.0"), &["collectors[1] (c)", "another collector"]);
     // An EPSG code no GeoTIFF can hold: refused with the scenario, before a rock runs or a file is written.
     let sc = scenario(d, "", 0.3, "300.0");
     std::fs::write(&sc, std::fs::read_to_string(&sc).unwrap().replace("crs_epsg = 2056", "crs_epsg = 999999")).unwrap();

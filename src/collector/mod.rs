@@ -251,10 +251,36 @@ fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
 }
 
 /// The collectors of a scenario's `[[collectors]]`, in the terrain's local frame.
+///
+/// # Errors
+/// Two collectors of one name (their rows could not be told apart), or a line with no point over the terrain
+/// (coordinates in another frame, most likely), named by its entry.
 pub fn scenario_collectors(specs: &[CollectorSpec], terrain: &Terrain) -> Result<Vec<Collector>> {
-    let mut out = Vec::new();
+    let mut out: Vec<Collector> = Vec::new();
     for (i, s) in specs.iter().enumerate() {
-        out.extend(s.build(i, terrain)?);
+        for c in s.build(i, terrain)? {
+            let field = format!("collectors[{i}] ({})", c.name);
+            if out.iter().any(|o| o.name == c.name) {
+                return Err(Error::invalid(
+                    field,
+                    "another collector has this name",
+                    "give every collector its own name (collectors.csv has one row per name)",
+                ));
+            }
+            // Sample the line every metre or so (at most 10,000 points) for ground under it.
+            let n = (c.length_m().ceil() as usize).clamp(1, 10_000);
+            if !(0..=n).any(|k| {
+                let p = c.point_at(c.length_m() * k as f64 / n as f64);
+                terrain.surface.height(p[0], p[1]).is_some()
+            }) {
+                return Err(Error::invalid(
+                    field,
+                    "no point of the line lies over the terrain",
+                    "give the line in the terrain's coordinates (the CRS of the DEM, or the mesh's x and y)",
+                ));
+            }
+            out.push(c);
+        }
     }
     Ok(out)
 }

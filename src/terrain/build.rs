@@ -251,14 +251,24 @@ pub fn assemble_terrain(
             ),
         ));
     }
-    for zone in &spec.zones {
+    for (z, zone) in spec.zones.iter().enumerate() {
         let m = index_of(&zone.material).unwrap_or(0) as u16;
         let poly = to_local(&zone.polygon);
+        let mut inside = 0;
         for (t, tri) in triangles.iter().enumerate() {
             let c = centre(&vertices, tri);
             if point_in_polygon(c.x, c.y, &poly) {
                 tri_mat[t] = m;
+                inside += 1;
             }
+        }
+        if inside == 0 {
+            return Err(Error::invalid(
+                format!("{}: terrain.zones[{z}].polygon", scenario.display()),
+                "no triangle of the terrain has its centre inside the polygon",
+                "give the polygon in the terrain's coordinates (the CRS of the DEM, or the mesh's x and y), around \
+                 at least one cell",
+            ));
         }
     }
     let mut terrain = Terrain::from_local(vertices, &triangles, &tri_mat, materials.to_vec()).map_err(|_| {
