@@ -666,6 +666,13 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     assert_eq!(json["model"], "2dlm");
     assert_eq!(json["holdout_ids"], serde_json::json!(["p001", "p010", "p019"]));
     assert!(out.join("report.md").is_file() && out.join("residual_map.svg").is_file());
+    // Its release groups mix drop heights of 0.5 to 15 m, so a model beats the group-median "floor": both the
+    // report and the command line say the floor is no lower bound there.
+    let calibration_mae = json["final"]["calibration"]["runout_mae_m"].as_f64().unwrap();
+    let calibration_floor = json["final"]["calibration"]["scatter_floor_mae_m"].as_f64().unwrap();
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(calibration_mae < calibration_floor, "{calibration_mae} {calibration_floor}");
+    assert!(md.contains("**The floor:**") && String::from_utf8_lossy(&o.stdout).contains("no lower bound"));
     // The final model as a profile scenario that `talus profile` runs: each material with the final values, the
     // campaign as its release (every run `repeats` times), files named relative to the scenario.
     let text = std::fs::read_to_string(out.join("calibrated_profile.toml")).unwrap();

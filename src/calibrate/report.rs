@@ -522,6 +522,18 @@ pub fn aims(m: &Metrics) -> [bool; 4] {
     [bias, w1, coverage, m.runout_mae_m <= 1.2 * m.scatter_floor_mae_m]
 }
 
+/// True when a model's `runout_mae_m` is below the scatter floor: the floor then is no lower bound, because the runs of
+/// a release group are not repeats of one release (they differ in release height, speed or point within
+/// `group_link_m`), and MAE/floor is not to be read as an aim.
+pub fn below_floor(m: &Metrics) -> bool {
+    m.runs > 0 && m.runout_mae_m < m.scatter_floor_mae_m
+}
+
+/// What [`below_floor`] means, for the report and the command line.
+pub const BELOW_FLOOR: &str = "the model's run-out MAE is below the scatter floor: the runs of a release group are \
+     not repeats of one release (they differ in release height, speed or point within group_link_m), so the floor is \
+     no lower bound here and MAE/floor is no aim to read";
+
 /// Whether a right model would meet the aims of bias, W1 and coverage on these runs, on average (the yardsticks of
 /// [`Metrics`]: the RMS bias, the mean W1 and coverage were the field runs draws of the model), in the order of
 /// [`aims`].
@@ -589,6 +601,10 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         r.timing.total_s,
         r.timing.threads
     );
+    let stages = [&r.baseline.calibration, &r.baseline.holdout, &r.final_stage.calibration, &r.final_stage.holdout];
+    if stages.iter().any(|m| below_floor(m)) {
+        let _ = writeln!(s, "**The floor:** {BELOW_FLOOR}.\n");
+    }
     for [a, b] in &r.duplicate_runs {
         let _ = writeln!(
             s,

@@ -100,6 +100,13 @@ pub fn run(a: BarrierArgs) -> anyhow::Result<()> {
     let ranked = study.ranked();
     let sized = study.assessments.iter().filter(|x| x.status == Status::Sized).count();
     say!("{} candidate lines, {} sized; best proposals:", study.candidates.len(), sized);
+    if sized == 0 {
+        say!(
+            "  (no candidate has barrier_design.min_rocks = {} rocks reaching its protected zone: raise --rocks, \
+             lower min_rocks, or check the asset line / candidates lie where rocks run)",
+            sc.file.barrier_design.min_rocks
+        );
+    }
     say!(
         "{:>3}  {:<34} {:>8} {:>9} {:>10} {:>10}  {:<16} {:>8} {:>8}",
         "#",

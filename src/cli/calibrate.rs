@@ -225,4 +225,7 @@ fn print_errors(set: &str, b: &Metrics, f: &Metrics) {
         "{set} runout_mae_m {:.2} -> {:.2} m (floor {:.2}), runout_bias_m {:+.2} -> {:+.2} m (if right ±{:.2}), runout_w1_m {:.2} -> {:.2} m (if right {:.2}), coverage_90 {:.2} -> {:.2} (if right {:.2})",
         b.runout_mae_m, f.runout_mae_m, f.scatter_floor_mae_m, b.runout_bias_m, f.runout_bias_m, f.runout_bias_if_right_m, b.runout_w1_m, f.runout_w1_m, f.runout_w1_if_right_m, b.coverage_90, f.coverage_90, f.coverage_90_if_right
     );
+    if talus::calibrate::report::below_floor(f) {
+        say!("  ({set}: {})", talus::calibrate::report::BELOW_FLOOR);
+    }
 }

@@ -108,6 +108,12 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
             r.cells
         );
     }
+    if summary.rasters.iter().all(|r| r.cells == 0) {
+        say!(
+            "  (no cell is reached by {} rocks of every model: raise --rocks to compare the maps)",
+            talus::envelope::WELL_SAMPLED_ROCKS
+        );
+    }
     let range = |x: &talus::envelope::Spread3, digits: usize| match (x.min, x.max) {
         (Some(lo), Some(hi)) => format!("{lo:.digits$}-{hi:.digits$}"),
         _ => "-".to_string(),
