@@ -180,6 +180,14 @@ impl Campaign {
                 Some(k) => k,
                 None => {
                     let p = self.dir.join(name);
+                    if !p.is_file() {
+                        return Err(Error::invalid(
+                            format!("{field}: shape"),
+                            format!("'{name}' is neither a built-in shape nor a file of the campaign folder"),
+                            "use cube, flat_box or smartie, a hull file's name relative to the campaign folder, or \
+                             leave the column empty to infer the shape from the sizes",
+                        ));
+                    }
                     ShapeKind::Hull { name: name.to_string(), points: crate::io::points::read_hull_points(&p)? }
                 }
             },

@@ -261,9 +261,14 @@ fn default_density() -> f64 {
     crate::rock::DEFAULT_DENSITY_KG_M3
 }
 
+/// The largest block mass a scenario may give, kg. Ours: about 370,000 m³ of rock, far beyond rockfall (rock
+/// avalanches move as a mass, not as one rigid block), and far below where the engine's numbers overflow (10³⁰⁰ kg
+/// gave infinite bounce heights).
+pub const MAX_ROCK_MASS_KG: f64 = 1e9;
+
 /// One mass or a range.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, serde::Serialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a mass in kg (a number) or a range [min, max]")]
 pub enum MassSpec {
     /// A fixed mass.
     One(f64),
@@ -764,6 +769,17 @@ impl RockSpec {
             }
         };
         positive("density_kg_m3", self.density_kg_m3)?;
+        let rock_mass = |m: f64| {
+            positive("mass_kg", m)?;
+            if m > MAX_ROCK_MASS_KG {
+                return Err(Error::invalid(
+                    format!("{field}.mass_kg"),
+                    format!("{m} kg is more than the largest block talus takes, {MAX_ROCK_MASS_KG} kg"),
+                    "give the block's mass in kg (10⁹ kg is a block of about 370,000 m³: a rock avalanche, not a rockfall)",
+                ));
+            }
+            Ok(())
+        };
         match (self.mass_kg, self.dimensions_m) {
             (Some(MassSpec::Range(_)), Some(_)) => {
                 return Err(Error::invalid(
@@ -779,10 +795,10 @@ impl RockSpec {
                     "give mass_kg = 1000 (or [100, 10000]), or dimensions_m = [a, b, c]",
                 ))
             }
-            (Some(MassSpec::One(m)), _) => positive("mass_kg", m)?,
+            (Some(MassSpec::One(m)), _) => rock_mass(m)?,
             (Some(MassSpec::Range([a, b])), _) => {
-                positive("mass_kg", a)?;
-                positive("mass_kg", b)?;
+                rock_mass(a)?;
+                rock_mass(b)?;
                 if a > b {
                     return Err(Error::invalid(
                         format!("{field}.mass_kg"),

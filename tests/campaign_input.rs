@@ -229,3 +229,14 @@ fn a_holdout_file_starting_with_a_byte_order_mark_is_read() {
     assert!(stderr.contains("ids.txt:2") && stderr.contains("not_a_run"), "{stderr}");
     assert!(!stderr.contains("ids.txt:1"), "{stderr}");
 }
+
+/// A block whose `shape` is neither built in nor a file of the campaign is refused naming the block and the shapes
+/// there are (it was an operating-system error on a path made from the name).
+#[test]
+fn an_unknown_block_shape_is_refused_naming_the_block() {
+    let blocks = "block_id,mass_kg,size_x_m,size_y_m,size_z_m,shape\nb1,50,0.3,0.3,0.3,spherre\n";
+    let dir = campaign(RELEASE_3D, DEPOSITION_3D, blocks);
+    let c = Campaign::read_on(dir.path(), Ground::Terrain).unwrap();
+    let e = c.body(&c.blocks["b1"]).unwrap_err().to_string();
+    assert!(e.contains("block b1: shape") && e.contains("'spherre'") && e.contains("cube, flat_box or smartie"), "{e}");
+}

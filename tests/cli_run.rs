@@ -291,8 +291,10 @@ fn bad_input_is_answered_with_where_what_and_how() {
     fails_cleanly(d, &level("[[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]"), &["terrain.level_beyond", "no vertex"]);
     // Cr of 1.5.
     fails_cleanly(d, &scenario(d, "", 1.5, "300.0"), &["materials.default.cr", "1.5"]);
-    // A negative mass.
+    // A negative mass, one no rockfall has, and a word.
     fails_cleanly(d, &scenario(d, "", 0.3, "-5.0"), &["rocks.mass_kg", "-5"]);
+    fails_cleanly(d, &scenario(d, "", 0.3, "1e300"), &["rocks.mass_kg", "largest block"]);
+    fails_cleanly(d, &scenario(d, "", 0.3, "\"heavy\""), &["scenario.toml:", "a mass in kg (a number) or a range"]);
     // An unknown key.
     fails_cleanly(d, &scenario(d, "colour = \"red\"", 0.3, "300.0"), &["scenario.toml:", "unknown field `colour`"]);
     // A material zone off the terrain.

@@ -130,7 +130,10 @@ pub const STATIC_EXCESS: &str = "static_excess_deg";
 
 /// A parameter as written: a number (fixed), `[min, max]` (free, starting mid-range) or a table.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(
+    untagged,
+    expecting = "a number (fixed), a range [min, max] (free) or a table { min, max, start } (free from start)"
+)]
 pub enum ParamSetting {
     /// Held at this value.
     Fixed(f64),
