@@ -266,6 +266,7 @@ pub fn run_scenario_with(
     let mut collector_stats = crate::collector::CollectorStats::new(&collectors, setup.terrain.barriers.len());
     let cell = sc.file.output.cell_size_m;
     let frame = RasterFrame::covering(&setup.terrain, cell, &format!("{}: output.cell_size_m", sc.path.display()))?;
+    let earlier_outputs = earlier_run_outputs(out_dir);
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
     let n = setup.rock_count();
     let threads = overrides.threads.or(sc.file.simulation.threads).unwrap_or(0);
@@ -448,7 +449,29 @@ pub fn run_scenario_with(
     };
     crate::io::write_json_atomic(&out_dir.join("summary.json"), &summary)?;
     crate::report::write_run_index(&products, &summary)?;
+    remove_stale_outputs(out_dir, &earlier_outputs, &summary.outputs)?;
     Ok(RunOutput { summary, grids, terrain: setup.terrain.clone(), collectors, collector_stats })
+}
+
+/// The files an earlier run listed in `out_dir/summary.json` (none if there is no such run): plain file names only.
+fn earlier_run_outputs(out_dir: &Path) -> Vec<String> {
+    let Ok(text) = std::fs::read_to_string(out_dir.join("summary.json")) else { return Vec::new() };
+    let Ok(json) = serde_json::from_str::<serde_json::Value>(&text) else { return Vec::new() };
+    let names = json["outputs"].as_array().into_iter().flatten().filter_map(|v| v.as_str());
+    names.filter(|n| Path::new(n).file_name().is_some_and(|f| f == *n)).map(String::from).collect()
+}
+
+/// Removes the files an earlier run into the same folder wrote (`earlier`) that this run did not (`now`), so that
+/// the folder holds one run (a run with `--paths` followed by one without left the old `paths.*`). Only files an
+/// earlier talus run listed are touched (ours).
+fn remove_stale_outputs(out_dir: &Path, earlier: &[String], now: &[String]) -> Result<()> {
+    for name in earlier.iter().filter(|n| !now.contains(n)) {
+        let path = out_dir.join(name);
+        if path.is_file() {
+            std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
+        }
+    }
+    Ok(())
 }
 
 /// The six hazard rasters (in [`RASTERS`] order). Cells off the terrain are nodata; on the terrain, probabilities

@@ -656,3 +656,30 @@ fn a_scenario_of_the_other_kind_is_refused_by_name() {
         assert!(!out.exists(), "{args:?} wrote {}", out.display());
     }
 }
+
+/// A run into the folder of an earlier one removes the earlier run's files it does not write again (paths, ASCII
+/// grids), and nothing that run did not list.
+#[test]
+fn a_run_into_an_earlier_runs_folder_leaves_one_run_there() {
+    let dir = tempfile::tempdir().unwrap();
+    let sc = scenario(dir.path(), "", 0.3, "300.0");
+    let out = dir.path().join("out");
+    let run = |extra: &[&str]| {
+        let o =
+            talus().args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]).args(extra).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    run(&["--paths", "3", "--ascii-grids"]);
+    assert!(out.join("paths.csv").is_file() && out.join("reach_probability.asc").is_file());
+    std::fs::write(out.join("my_notes.txt"), "mine").unwrap();
+    run(&["--seed", "9"]);
+    assert!(!out.join("paths.csv").exists() && !out.join("reach_probability.asc").exists());
+    assert!(out.join("my_notes.txt").is_file() && out.join("reach_probability.tif").is_file());
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let listed: Vec<&str> = summary["outputs"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+    for e in std::fs::read_dir(&out).unwrap() {
+        let name = e.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(name == "my_notes.txt" || listed.contains(&name.as_str()), "{name} is not this run's");
+    }
+}
