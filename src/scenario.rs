@@ -633,6 +633,24 @@ impl SourceSpec {
             _ => {}
         }
         check_finite(&format!("{field}.points"), &self.points)?;
+        // Keys of another source type would be ignored: refuse them, so that a user's selection is not lost.
+        for (key, given, owner) in [
+            ("material", self.material.is_some(), SourceKind::Scatter),
+            ("min_slope_deg", self.min_slope_deg.is_some(), SourceKind::Scatter),
+            ("max_slope_deg", self.max_slope_deg.is_some(), SourceKind::Scatter),
+            ("within", !self.within.is_empty(), SourceKind::Scatter),
+            ("campaign", self.campaign.is_some(), SourceKind::Campaign),
+            ("repeats", self.repeats.is_some(), SourceKind::Campaign),
+        ] {
+            if given && self.kind != owner {
+                let name = |k: SourceKind| format!("{k:?}").to_lowercase();
+                return Err(Error::invalid(
+                    format!("{field}.{key}"),
+                    format!("only applies to {} sources, and this one is `{}`", name(owner), name(self.kind)),
+                    "remove the key, or set `type` to the source type it belongs to",
+                ));
+            }
+        }
         if !self.within.is_empty() {
             check_polygon(&format!("{field}.within"), &self.within)?;
         }

@@ -297,6 +297,14 @@ fn bad_input_is_answered_with_where_what_and_how() {
     fails_cleanly(d, &scenario(d, "", 0.3, "\"heavy\""), &["scenario.toml:", "a mass in kg (a number) or a range"]);
     // An unknown key.
     fails_cleanly(d, &scenario(d, "colour = \"red\"", 0.3, "300.0"), &["scenario.toml:", "unknown field `colour`"]);
+    // A scatter key on a polyline source (it would be ignored).
+    let sc = scenario(d, "", 0.3, "300.0");
+    std::fs::write(
+        &sc,
+        std::fs::read_to_string(&sc).unwrap().replace("height_m = 0.2", "height_m = 0.2\nmin_slope_deg = 80.0"),
+    )
+    .unwrap();
+    fails_cleanly(d, &sc, &["sources[0].min_slope_deg", "only applies to scatter sources", "`polyline`"]);
     // A material zone off the terrain.
     let zone = "[[terrain.zones]]\nmaterial = \"default\"\npolygon = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]\n";
     fails_cleanly(d, &scenario(d, zone, 0.3, "300.0"), &["terrain.zones[0].polygon", "no triangle"]);
