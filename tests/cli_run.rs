@@ -521,6 +521,10 @@ fn the_same_model_twice_has_no_spread_and_models_of_two_frames_are_refused() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("b: rasters") && err.contains("cell_size_m") && err.contains("how to fix"), "{err}");
     assert!(!bad.join("models").exists(), "a model ran before the refusal");
+    // One file given twice is refused (it would read as two models that agree).
+    let o = envelope(&[&sa, &sa], &bad, &[]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("given twice"));
     // One model is not an envelope.
     let o = envelope(&[&sa], &bad, &[]);
     let err = String::from_utf8_lossy(&o.stderr);

@@ -48,6 +48,16 @@ pub struct EnvelopeArgs {
 
 pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
     a.control.check()?;
+    // One file given twice would read as models that agree.
+    let canonical: Vec<PathBuf> = a.scenarios.iter().map(|p| p.canonicalize().unwrap_or_else(|_| p.clone())).collect();
+    if let Some((i, p)) = canonical.iter().enumerate().find(|(i, p)| canonical[..*i].contains(p)) {
+        anyhow::bail!(
+            "{}: given twice (as model {} and as an earlier one)\n  how to fix: give each model once; an envelope \
+             of one model's seeds is --floor",
+            p.display(),
+            i + 1
+        );
+    }
     if super::is_profile(&a.scenarios[0]) {
         return run_profiles(&a);
     }
