@@ -141,7 +141,7 @@ impl Profile {
     pub fn from_csv_reader<R: std::io::Read>(mut reader: R, source: &str) -> Result<Profile> {
         let mut text = Vec::new();
         reader.read_to_end(&mut text).map_err(|e| Error::io(source, e))?;
-        let t = Table::parse(&text, source, false)?;
+        let t = Table::parse(&with_last_material(text), source, false)?;
         let hint = "start the file with the line `x_m,z_m,material`";
         let (ix, iz, imat) = (t.need("x_m", hint)?, t.need("z_m", hint)?, t.col("material"));
         let mut vertices = Vec::new();
@@ -380,12 +380,37 @@ impl Profile {
     }
 }
 
+/// The last vertex's material is ignored (it starts no segment), so a last row may leave it out: such a row gets an
+/// empty field, since the CSV reader refuses rows shorter than the header.
+fn with_last_material(text: Vec<u8>) -> Vec<u8> {
+    let Ok(s) = std::str::from_utf8(&text) else { return text };
+    let lines: Vec<&str> = s.lines().collect();
+    let (Some(header), Some(k)) = (lines.first(), lines.iter().rposition(|l| !l.trim().is_empty())) else {
+        return text;
+    };
+    let ends_in_material = header.rsplit(',').next().is_some_and(|c| c.trim() == "material");
+    if k == 0 || !ends_in_material || lines[k].split(',').count() + 1 != header.split(',').count() {
+        return text;
+    }
+    let mut out = lines[..k].join("\n");
+    out.push_str(&format!("\n{},\n", lines[k].trim_end()));
+    out.into_bytes()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn csv(text: &str) -> Result<Profile> {
         Profile::from_csv_reader(text.as_bytes(), "p.csv")
+    }
+
+    #[test]
+    fn the_last_row_may_leave_out_its_material_but_no_other_row() {
+        let p = csv("x_m,z_m,material\n0,10,rock\n10,0\n").unwrap();
+        assert_eq!(p.n_segments(), 1);
+        let e = csv("x_m,z_m,material\n0,10\n10,0,rock\n").unwrap_err().to_string();
+        assert!(e.contains("p.csv:2"), "{e}");
     }
 
     #[test]
