@@ -340,6 +340,14 @@ pub enum ShapeRef {
     Hull(PathBuf),
 }
 
+/// The keys of `[simulation]`, quoted as serde lists expected keys.
+fn simulation_keys() -> String {
+    let params = serde_json::to_value(SimParams::default()).unwrap_or_default();
+    let engine = params.as_object().into_iter().flat_map(|m| m.keys().cloned());
+    let keys: Vec<String> = ["seed", "rocks", "threads"].map(String::from).into_iter().chain(engine).collect();
+    keys.iter().map(|k| format!("`{k}`")).collect::<Vec<_>>().join(", ")
+}
+
 impl ScenarioFile {
     /// Reads and parses `path` (no checks beyond the TOML structure).
     pub fn read(path: &Path) -> Result<ScenarioFile> {
@@ -350,9 +358,14 @@ impl ScenarioFile {
                 Some(l) => format!("{}:{l}", path.display()),
                 None => path.display().to_string(),
             };
+            let mut message = e.message().to_string();
+            // [simulation] is the only table with flattened keys, where serde cannot list the keys it expects.
+            if message.starts_with("unknown field") && !message.contains("expected") {
+                message.push_str(&format!(", expected one of {}", simulation_keys()));
+            }
             Error::format(
                 location,
-                e.message().to_string(),
+                message,
                 "see the scenario format in README.md, \"Scenario files\" ([[collectors]], [hazard_zones] and \
                  [barrier_design] in docs/barrier.md); keys are case-sensitive",
             )

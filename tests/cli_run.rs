@@ -297,6 +297,10 @@ fn bad_input_is_answered_with_where_what_and_how() {
     fails_cleanly(d, &scenario(d, "", 0.3, "\"heavy\""), &["scenario.toml:", "a mass in kg (a number) or a range"]);
     // An unknown key.
     fails_cleanly(d, &scenario(d, "colour = \"red\"", 0.3, "300.0"), &["scenario.toml:", "unknown field `colour`"]);
+    // An unknown engine key: [simulation]'s keys are listed although serde cannot list flattened ones.
+    let sc = scenario(d, "", 0.3, "300.0");
+    std::fs::write(&sc, std::fs::read_to_string(&sc).unwrap().replace("seed = 3", "seed = 3\nrockz = 5")).unwrap();
+    fails_cleanly(d, &sc, &["unknown field `rockz`", "`rocks`", "`dt_s`"]);
     // A scatter key on a polyline source (it would be ignored).
     let sc = scenario(d, "", 0.3, "300.0");
     std::fs::write(
