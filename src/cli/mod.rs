@@ -75,35 +75,41 @@ pub fn load_models(
 
 /// True if the scenario file at `path` is a 2DLM profile scenario (it has a `profile` key).
 pub fn is_profile(path: &std::path::Path) -> bool {
-    std::fs::read_to_string(path)
-        .ok()
-        .and_then(|t| t.parse::<toml::Table>().ok())
-        .is_some_and(|t| t.contains_key("profile"))
+    has_top_key(path, "profile")
 }
 
-/// Reads a 3D scenario for `talus COMMAND`, refusing a profile scenario by name rather than by its first unknown key.
+/// True if the TOML file at `path` reads and has the top-level key `key`.
+fn has_top_key(path: &std::path::Path, key: &str) -> bool {
+    std::fs::read_to_string(path).ok().and_then(|t| t.parse::<toml::Table>().ok()).is_some_and(|t| t.contains_key(key))
+}
+
+/// Reads a 3D scenario for `talus COMMAND`; a profile scenario, which fails to read as one, is named as such rather
+/// than by its first unknown key.
 pub fn read_3d(path: &std::path::Path, command: &str) -> anyhow::Result<talus::scenario::ScenarioFile> {
-    if is_profile(path) {
-        anyhow::bail!(
+    talus::scenario::ScenarioFile::read(path).map_err(|e| {
+        if !is_profile(path) {
+            return e.into();
+        }
+        anyhow::anyhow!(
             "{}: a 2DLM profile scenario (it has `profile`), while `talus {command}` takes a 3D scenario (the format \
              of `talus run`)\n  how to fix: run it with `talus profile`, or give a 3D scenario",
             path.display()
-        );
-    }
-    Ok(talus::scenario::ScenarioFile::read(path)?)
+        )
+    })
 }
 
-/// Reads a 2DLM profile scenario for `talus COMMAND`, refusing a 3D scenario by name.
+/// Reads a 2DLM profile scenario for `talus COMMAND`; a 3D scenario, which fails to read as one, is named as such.
 pub fn read_profile(path: &std::path::Path, command: &str) -> anyhow::Result<talus::lumped2d::ProfileScenario> {
-    let text = std::fs::read_to_string(path).ok().and_then(|t| t.parse::<toml::Table>().ok());
-    if text.is_some_and(|t| t.contains_key("terrain") && !t.contains_key("profile")) {
-        anyhow::bail!(
+    talus::lumped2d::ProfileScenario::load(path).map_err(|e| {
+        if !has_top_key(path, "terrain") || is_profile(path) {
+            return e.into();
+        }
+        anyhow::anyhow!(
             "{}: a 3D scenario (it has [terrain]), while `talus {command}` takes a 2DLM profile scenario\n  how to \
              fix: run it with `talus run`, or give a profile scenario (examples/profile_bench.toml)",
             path.display()
-        );
-    }
-    Ok(talus::lumped2d::ProfileScenario::load(path)?)
+        )
+    })
 }
 
 /// Refuses `--threads 0` and more than [`talus::parallel::MAX_THREADS`].
