@@ -241,7 +241,7 @@ pub fn run_study(config: &StudyConfig, progress: Progress) -> Result<StudyResult
         cells: Vec::new(),
         rocks: Vec::new(),
         timings: Vec::new(),
-        threads: threads_used(config.threads),
+        threads: crate::parallel::threads_used(config.threads),
     };
     if config.lumped2d.runs > 0 {
         let t0 = Instant::now();
@@ -266,22 +266,6 @@ pub fn run_study(config: &StudyConfig, progress: Progress) -> Result<StudyResult
 fn timing(model: Model, rocks: usize, t0: Instant) -> ModelTiming {
     let wall = t0.elapsed().as_secs_f64();
     ModelTiming { model, rocks, wall_time_s: wall, rocks_per_second: rocks as f64 / wall.max(1e-12) }
-}
-
-fn threads_used(requested: usize) -> usize {
-    #[cfg(feature = "parallel")]
-    {
-        if requested == 0 {
-            rayon::current_num_threads()
-        } else {
-            requested
-        }
-    }
-    #[cfg(not(feature = "parallel"))]
-    {
-        let _ = requested;
-        1
-    }
 }
 
 /// Runs every repeat × configuration × rock of one model and appends the cells and rocks; returns the number of

@@ -417,10 +417,8 @@ pub fn run_profile(scenario: &ProfileScenario, out_dir: &Path) -> Result<Profile
     profile.write_csv(&out_dir.join("profile.csv"))?;
 
     let wall = start_time.elapsed().as_secs_f64();
-    #[cfg(feature = "parallel")]
-    let threads = rayon::current_num_threads();
-    #[cfg(not(feature = "parallel"))]
-    let threads = 1;
+    // The pool this runs in (`cli::with_threads` installs the one asked for).
+    let threads = crate::parallel::threads_used(0);
     let (x0, x1) = profile.x_range_m();
     let summary = ProfileSummary {
         talus_version: env!("CARGO_PKG_VERSION").to_string(),
