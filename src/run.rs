@@ -82,6 +82,8 @@ pub struct RunSummary {
     pub collectors: Vec<crate::collector::facts::CollectorFacts>,
     /// The barriers: rocks caught and rocks that broke through.
     pub barriers: Vec<crate::collector::facts::BarrierFacts>,
+    /// Keys of the scenario the terrain does not use ([`Terrain::notes`]).
+    pub warnings: Vec<String>,
 }
 
 /// Terrain facts for the manifest.
@@ -446,6 +448,7 @@ pub fn run_scenario_with(
             &collector_stats,
         ),
         barriers: crate::collector::facts::barrier_facts(&terrain.barriers, &collector_stats),
+        warnings: terrain.notes.clone(),
     };
     crate::io::write_json_atomic(&out_dir.join("summary.json"), &summary)?;
     crate::report::write_run_index(&products, &summary)?;

@@ -120,9 +120,10 @@ pub struct TerrainSpec {
     /// How triangles get their materials (default: single).
     #[serde(default)]
     pub materials_by: MaterialsBy,
-    /// With `materials_by = "slope"`: faces steeper than this are `face`, degrees (default: 45).
-    #[serde(default = "default_slope_face_deg")]
-    pub slope_face_deg: f64,
+    /// With `materials_by = "slope"`: faces steeper than this are `face`, degrees (default:
+    /// [`DEFAULT_SLOPE_FACE_DEG`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slope_face_deg: Option<f64>,
     /// Renames: group, material or file name → material name (default: the same name).
     #[serde(default)]
     pub material_names: BTreeMap<String, String>,
@@ -142,9 +143,9 @@ pub struct TerrainSpec {
     pub level_beyond: Option<Vec<[f64; 2]>>,
 }
 
-fn default_slope_face_deg() -> f64 {
-    45.0
-}
+/// The slope that parts `face` from `floor` with `materials_by = "slope"` when `slope_face_deg` is not given,
+/// degrees (ours).
+pub const DEFAULT_SLOPE_FACE_DEG: f64 = 45.0;
 
 /// `[[terrain.zones]]`: a polygon of another material.
 #[derive(Debug, Clone, Deserialize, serde::Serialize)]
@@ -396,10 +397,10 @@ impl ScenarioFile {
                 "use the EPSG code of a projected or geographic CRS, e.g. 2056 (Swiss LV95), or leave the key out",
             ));
         }
-        if !(self.terrain.slope_face_deg > 0.0 && self.terrain.slope_face_deg < 90.0) {
+        if let Some(deg) = self.terrain.slope_face_deg.filter(|d| !(*d > 0.0 && *d < 90.0)) {
             return Err(Error::invalid(
                 f("terrain.slope_face_deg"),
-                format!("must be in (0, 90), got {}", self.terrain.slope_face_deg),
+                format!("must be in (0, 90), got {deg}"),
                 "use e.g. 45",
             ));
         }

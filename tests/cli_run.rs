@@ -260,6 +260,35 @@ fn ground_levelled_beyond_a_polygon_continues_at_the_height_of_its_edge() {
 }
 
 #[test]
+fn keys_the_terrain_does_not_use_are_warned_about_and_recorded() {
+    // An unused material, a rename of a name the file does not hold and a slope threshold without slope materials
+    // change nothing: the run goes on, says so on stderr and records it in summary.json.
+    let dir = tempfile::tempdir().unwrap();
+    let sc = with_terrain_key(dir.path(), "slope_face_deg", "40.0\nmaterial_names = { scree = \"default\" }");
+    let text = std::fs::read_to_string(&sc).unwrap()
+        + "\n[materials.rockfill]\ncr_mean = 0.2\nstatic_friction_deg = 40.0\ndynamic_friction_deg = 35.0\n";
+    std::fs::write(&sc, text).unwrap();
+    let out = dir.path().join("out");
+    let o = talus().args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    for needle in [
+        "warning: [materials.rockfill] is defined but no triangle of the terrain has it",
+        "warning: terrain.slope_face_deg is not used: materials_by is \"single\"",
+        "warning: terrain.material_names.scree is not used",
+    ] {
+        assert!(err.contains(needle), "stderr lacks '{needle}': {err}");
+    }
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["warnings"].as_array().unwrap().len(), 3, "{}", summary["warnings"]);
+    // The shipped scenario from the same DEM and nothing unused: no warning.
+    let clean = scenario(dir.path(), "", 0.3, "300.0");
+    let o = talus().args(["run", clean.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
 fn bad_input_is_answered_with_where_what_and_how() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

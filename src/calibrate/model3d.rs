@@ -95,7 +95,7 @@ impl Model3d {
             up: map.up,
             crs_epsg: None,
             materials_by: map.materials_by,
-            slope_face_deg: map.slope_face_deg.unwrap_or(45.0),
+            slope_face_deg: map.slope_face_deg,
             material_names: map.material_names.clone(),
             zones: map.zones.clone(),
             clip: map.clip.clone(),

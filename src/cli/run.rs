@@ -79,6 +79,9 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
             c.passing_height_m_p95.map_or("-".into(), |v| format!("{v:.2}"))
         );
     }
+    for w in &summary.warnings {
+        eprintln!("warning: {w}");
+    }
     say!(
         "wrote {} files to {}; open {} to see them",
         summary.outputs.len(),

@@ -5,7 +5,7 @@ use super::{horizontal_to_local, point_in_polygon, Material, Terrain};
 use crate::error::{Error, Result};
 use crate::io::MeshData;
 use crate::raster::{Crs, Grid};
-use crate::scenario::{MaterialsBy, TerrainSpec};
+use crate::scenario::{MaterialsBy, TerrainSpec, DEFAULT_SLOPE_FACE_DEG};
 use kiddo::{ImmutableKdTree, SquaredEuclidean};
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
@@ -220,7 +220,7 @@ pub fn assemble_terrain(
                 let [a, b, c] = t.map(|k| vertices[k as usize]);
                 let n: Vector3<f64> = (b - a).cross(&(c - a));
                 let slope = (n.z.abs() / n.norm().max(1e-300)).clamp(0.0, 1.0).acos().to_degrees();
-                index_of(if slope > spec.slope_face_deg { "face" } else { "floor" }).unwrap_or(0)
+                index_of(if slope > spec.slope_face_deg.unwrap_or(DEFAULT_SLOPE_FACE_DEG) { "face" } else { "floor" }).unwrap_or(0)
             }
             _ => {
                 let target = spec.material_names.get(name).map(String::as_str).unwrap_or(name);
@@ -281,7 +281,45 @@ pub fn assemble_terrain(
     terrain.origin = origin;
     terrain.up = up;
     terrain.crs = crs;
+    terrain.notes = unused_keys(&terrain, spec, &names);
     Ok(terrain)
+}
+
+/// What `spec` asks that the built terrain does not use: materials no triangle has, and `material_names` entries
+/// no group, material or file of the terrain files (`names`, one per triangle) carries.
+fn unused_keys(terrain: &Terrain, spec: &TerrainSpec, names: &[String]) -> Vec<String> {
+    let by = format!("{:?}", spec.materials_by).to_lowercase();
+    let mut notes = Vec::new();
+    for (m, n) in terrain.materials.iter().zip(terrain.triangles_per_material()) {
+        if n == 0 {
+            notes.push(format!(
+                "[materials.{}] is defined but no triangle of the terrain has it (materials_by = \"{by}\"{}): it \
+                 changes nothing",
+                m.name,
+                if spec.zones.is_empty() { "" } else { " and the zones" }
+            ));
+        }
+    }
+    if spec.slope_face_deg.is_some() && spec.materials_by != MaterialsBy::Slope {
+        notes.push(format!("terrain.slope_face_deg is not used: materials_by is \"{by}\", not \"slope\""));
+    }
+    let by_name = matches!(spec.materials_by, MaterialsBy::Group | MaterialsBy::Material | MaterialsBy::File);
+    let mut held: Vec<&str> = names.iter().map(String::as_str).collect();
+    held.sort_unstable();
+    held.dedup();
+    for from in spec.material_names.keys() {
+        if !by_name {
+            notes.push(format!(
+                "terrain.material_names.{from} is not used: materials_by = \"{by}\" does not read names from the files"
+            ));
+        } else if held.binary_search(&from.as_str()).is_err() {
+            notes.push(format!(
+                "terrain.material_names.{from}: the terrain files hold no {by} named '{from}' (they hold: {})",
+                held.iter().map(|n| format!("'{n}'")).collect::<Vec<_>>().join(", ")
+            ));
+        }
+    }
+    notes
 }
 
 /// Gives every vertex outside `poly` the height of the nearest vertex inside it (horizontal distance, a kiddo k-d

@@ -67,6 +67,9 @@ pub struct Terrain {
     pub stats: SurfaceStats,
     /// Barriers standing on the terrain (none by default).
     pub barriers: Vec<crate::sim::Barrier>,
+    /// What the scenario asks that the terrain does not use (a material no triangle has, a renamed group the
+    /// files do not hold): warnings for the user, not errors.
+    pub notes: Vec<String>,
 }
 
 impl Terrain {
@@ -78,6 +81,15 @@ impl Terrain {
     /// The material of triangle `t`.
     pub fn material_of(&self, t: u32) -> &Material {
         &self.materials[self.triangle_material[t as usize] as usize]
+    }
+
+    /// Triangles of each material, in the order of `materials`.
+    pub fn triangles_per_material(&self) -> Vec<usize> {
+        let mut n = vec![0; self.materials.len()];
+        for &m in &self.triangle_material {
+            n[m as usize] += 1;
+        }
+        n
     }
 
     /// Index of the material named `name`.
@@ -114,6 +126,7 @@ impl Terrain {
             crs: Crs::default(),
             stats,
             barriers: Vec::new(),
+            notes: Vec::new(),
         })
     }
 
