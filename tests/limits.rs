@@ -187,11 +187,13 @@ fn out_naming_the_input_terrain_is_refused_and_the_terrain_kept() {
 }
 
 #[test]
-fn a_mesh_file_extension_that_does_not_match_what_is_written_is_refused() {
+fn an_output_file_extension_that_does_not_match_what_is_written_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     refused(&["mesh", "bench", "--out", "x.stl"], dir.path(), &["--out", "x.stl", ".obj"]);
     refused(&["mesh", "bench", "--2d", "--out", "x.obj"], dir.path(), &["--out", "x.obj", ".csv"]);
     refused(&["mesh", "bench", "--out", "x"], dir.path(), &["--out", ".obj"]);
+    stack_obj(dir.path());
+    refused(&["section", "stack.obj", "--line", "0,30,160,30", "--out", "s.txt"], dir.path(), &["--out", ".csv"]);
     // The matching extensions are written, in any case.
     for args in [vec!["mesh", "bench", "--out", "x.OBJ"], vec!["mesh", "bench", "--2d", "--out", "x.csv"]] {
         let o = talus(&args, dir.path());

@@ -47,7 +47,7 @@ enum Up {
 }
 
 pub fn run(a: SectionArgs) -> anyhow::Result<()> {
-    super::check_out_file("--out", &a.out, None, &[&a.terrain])?;
+    super::check_out_file("--out", &a.out, Some("csv"), &[&a.terrain])?;
     if a.line.len() < 4 || !a.line.len().is_multiple_of(2) {
         anyhow::bail!(
             "--line: give an even number of coordinates, at least two points (x1,y1,x2,y2), got {} numbers",
