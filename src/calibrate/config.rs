@@ -721,6 +721,33 @@ impl CalibrationConfig {
         Ok(())
     }
 
+    /// Refuses the tables of the other model: `[simulation]` and `[terrain]` (3DRB) in a 2DLM calibration,
+    /// `[options2d]` (2DLM) in a 3DRB one. They would be read and never used.
+    ///
+    /// # Errors
+    /// A table of the other model differs from its defaults: an error naming it, with the table to use.
+    pub fn check_model_tables(&self, model: ModelKind, source: &str) -> Result<()> {
+        let set = |v: serde_json::Result<serde_json::Value>, d: serde_json::Result<serde_json::Value>| v.ok() != d.ok();
+        let unused = match model {
+            ModelKind::Lumped2d => [
+                ("simulation", set(serde_json::to_value(&self.simulation), serde_json::to_value(SimParams::default()))),
+                ("terrain", set(serde_json::to_value(&self.terrain), serde_json::to_value(TerrainMap::default()))),
+            ]
+            .into_iter()
+            .find(|(_, s)| *s)
+            .map(|(t, _)| (t, "options2d")),
+            ModelKind::Rigid3d => (self.options2d != Options2d::default()).then_some(("options2d", "simulation")),
+        };
+        match unused {
+            None => Ok(()),
+            Some((table, instead)) => Err(Error::invalid(
+                format!("{source}: {table}"),
+                format!("[{table}] does not apply to a {} calibration", model.as_str()),
+                format!("leave it out; a {} calibration's engine settings are under [{instead}]", model.as_str()),
+            )),
+        }
+    }
+
     /// Checks that the effect names under `[effects]` (candidates and declared) exist for `model`, and that each
     /// declared effect has a parameter and bounds inside the effect's own.
     pub fn check_effects(&self, model: ModelKind, source: &str) -> Result<()> {
@@ -788,6 +815,32 @@ fn check_setting(field: &str, s: &ParamSetting) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_other_models_tables_are_refused() {
+        let check = |text: &str, model| {
+            CalibrationConfig::from_toml_str(text, "c.toml").unwrap().check_model_tables(model, "c.toml")
+        };
+        let sim = "[simulation]\nmax_time_s = 30.0\n";
+        let terrain = "[terrain]\nmaterials_by = \"slope\"\n";
+        let options = "[options2d]\nscale_rn_by_velocity = true\n";
+        for (text, model, table) in [
+            (sim, ModelKind::Lumped2d, "[simulation]"),
+            (terrain, ModelKind::Lumped2d, "[terrain]"),
+            (options, ModelKind::Rigid3d, "[options2d]"),
+        ] {
+            let e = check(text, model).unwrap_err().to_string();
+            assert!(e.contains(table) && e.contains("does not apply"), "{e}");
+        }
+        for (text, model) in [
+            (sim, ModelKind::Rigid3d),
+            (terrain, ModelKind::Rigid3d),
+            (options, ModelKind::Lumped2d),
+            ("", ModelKind::Lumped2d),
+        ] {
+            check(text, model).unwrap();
+        }
+    }
 
     #[test]
     fn settings_parse_with_defaults_and_errors_name_the_key() {

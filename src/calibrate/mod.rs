@@ -75,6 +75,7 @@ pub fn open_model(
     };
     cfg.check_materials(kind, model.materials(), source)?;
     cfg.check_effects(kind, source)?;
+    cfg.check_model_tables(kind, source)?;
     Ok(model)
 }
 

@@ -220,7 +220,8 @@ pub fn assemble_terrain(
                 let [a, b, c] = t.map(|k| vertices[k as usize]);
                 let n: Vector3<f64> = (b - a).cross(&(c - a));
                 let slope = (n.z.abs() / n.norm().max(1e-300)).clamp(0.0, 1.0).acos().to_degrees();
-                index_of(if slope > spec.slope_face_deg.unwrap_or(DEFAULT_SLOPE_FACE_DEG) { "face" } else { "floor" }).unwrap_or(0)
+                index_of(if slope > spec.slope_face_deg.unwrap_or(DEFAULT_SLOPE_FACE_DEG) { "face" } else { "floor" })
+                    .unwrap_or(0)
             }
             _ => {
                 let target = spec.material_names.get(name).map(String::as_str).unwrap_or(name);
