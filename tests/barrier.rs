@@ -523,3 +523,29 @@ fn barrier_models_on_a_relative_site_with_a_campaign_source() {
     assert_eq!(runs.len(), 2, "{runs:?}");
     assert!(runs.iter().all(|r| r.join("without_barrier/summary.json").is_file()), "{runs:?}");
 }
+
+#[test]
+fn an_asset_line_or_polygon_off_the_terrain_is_refused_before_any_run() {
+    // The bench stack spans about 0-160 m by 0-100 m: a line given in another frame lies far off it.
+    let dir = tempfile::tempdir().unwrap();
+    for (key, value) in [
+        ("asset_line", "[[150000.0, 0.0], [150000.0, 100.0]]"),
+        ("asset_polygon", "[[150000.0, 0.0], [150100.0, 0.0], [150100.0, 100.0]]"),
+    ] {
+        let path = small_bench_scenario(dir.path(), &format!("[barrier_design]\n{key} = {value}\n"));
+        let out = dir.path().join("study");
+        let e = propose(&scenario(&path), &RunOverrides::default(), &out, &|_| {}, &|_, _| {}).unwrap_err();
+        let e = e.to_string();
+        assert!(
+            e.contains(&format!("barrier_design.{key}")) && e.contains("no part of it lies over the terrain"),
+            "{e}"
+        );
+        assert!(!out.exists(), "{key}: output written despite the error");
+    }
+    // A polygon around the whole terrain protects all of it: accepted.
+    let around = "[[-1000.0, -1000.0], [1000.0, -1000.0], [1000.0, 1000.0], [-1000.0, 1000.0]]";
+    let path =
+        small_bench_scenario(dir.path(), &format!("[barrier_design]\nasset_polygon = {around}\nmin_rocks = 10\n"));
+    let o = RunOverrides { rocks: Some(20), ..Default::default() };
+    propose(&scenario(&path), &o, &dir.path().join("around"), &|_| {}, &|_, _| {}).unwrap();
+}

@@ -33,7 +33,7 @@ use crate::error::{Error, Result};
 use crate::run::{load_terrain, run_scenario_with, RunExtras, RunOutput, RunOverrides};
 use crate::scenario::{BarrierSpec, Scenario};
 use crate::terrain::frame::local_to_horizontal;
-use crate::terrain::{horizontal_to_local, Terrain};
+use crate::terrain::{horizontal_to_local, point_in_polygon, Terrain};
 use std::path::Path;
 
 /// One model's runs in a study.
@@ -98,6 +98,39 @@ pub fn protected_zone(spec: &DesignSpec, terrain: &Terrain) -> Option<ProtectedZ
     }
 }
 
+/// Refuses a protected zone with no part over the terrain: no point of the asset line (sampled about every
+/// metre) or of the polygon's edge over it, and no terrain vertex inside the polygon.
+///
+/// # Errors
+/// The zone lies off the terrain (coordinates in another frame, most likely), named by `field`.
+fn check_zone_on_terrain(zone: &ProtectedZone, terrain: &Terrain, field: &str) -> Result<()> {
+    let (key, pts, closed) = match zone {
+        ProtectedZone::Line(p) => ("asset_line", p, false),
+        ProtectedZone::Polygon(p) => ("asset_polygon", p, true),
+    };
+    let over = |p: [f64; 2]| terrain.surface.height(p[0], p[1]).is_some();
+    let mut edges: Vec<([f64; 2], [f64; 2])> = pts.windows(2).map(|w| (w[0], w[1])).collect();
+    if closed {
+        edges.push((pts[pts.len() - 1], pts[0]));
+    }
+    let on_edge = edges.iter().any(|&(a, b)| {
+        let n = ((b[0] - a[0]).hypot(b[1] - a[1]).ceil() as usize).clamp(1, 10_000);
+        (0..=n).any(|k| {
+            let t = k as f64 / n as f64;
+            over([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])])
+        })
+    });
+    let encloses = closed && terrain.surface.vertices().iter().any(|v| point_in_polygon(v.x, v.y, pts));
+    if on_edge || encloses {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        format!("{field}.{key}"),
+        "no part of it lies over the terrain",
+        "give it in the terrain's coordinates (the CRS of the DEM, or the mesh's x and y)",
+    ))
+}
+
 /// The model `model` once per seed `seed`, `seed + 1`, ... (`n` of them, named `seed_S`): sized together, the
 /// design that Monte Carlo noise alone asks for against `n` models, beside which a design against `n` calibrated
 /// models is read (`talus barrier --floor`; ours, as `talus envelope --floor`).
@@ -139,6 +172,10 @@ pub fn propose_models(
     let sc = &models[0].1;
     let spec = &sc.file.barrier_design;
     let terrain = load_terrain(sc)?;
+    let zone = protected_zone(spec, &terrain);
+    if let Some(z) = &zone {
+        check_zone_on_terrain(z, &terrain, &format!("{}: barrier_design", sc.path.display()))?;
+    }
     stage("finding candidate lines");
     let candidates = candidates::candidates(&terrain, spec, sc.file.output.cell_size_m);
     if candidates.is_empty() {
@@ -148,7 +185,6 @@ pub fn propose_models(
             "give a toe_line or asset_line with offsets_m, a smaller contour_interval_m, or a larger max_slope_deg",
         ));
     }
-    let zone = protected_zone(spec, &terrain);
     let cand_cols: Vec<Collector> =
         candidates.iter().map(|c| Collector::new(c.name.clone(), c.line_m.clone(), spec.segment_m)).collect();
     let offset = crate::collector::scenario_collectors(&sc.file.collectors, &terrain)?.len();
