@@ -240,3 +240,24 @@ fn an_unknown_block_shape_is_refused_naming_the_block() {
     let e = c.body(&c.blocks["b1"]).unwrap_err().to_string();
     assert!(e.contains("block b1: shape") && e.contains("'spherre'") && e.contains("cube, flat_box or smartie"), "{e}");
 }
+
+#[test]
+fn a_y_up_terrain_reads_release_points_in_its_own_axes() {
+    // A 50 m square in a y-up OBJ (height y = 0, horizontal x and z): releases 60 m above it at x 10-20, z 12. The
+    // release check once took (x, y) for the horizontal position and found y = 60 off the terrain.
+    let release = RELEASE_3D.replace(",20,12,", ",60,12,");
+    let d = campaign(&release, DEPOSITION_3D, BLOCKS);
+    let obj = d.path().join("square.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 50 0 0\nv 50 0 50\nv 0 0 50\nf 1 2 3\nf 1 3 4\n").unwrap();
+    let mut cfg = CalibrationConfig::default();
+    cfg.terrain.up = talus::terrain::UpAxis::Y;
+    open_model(d.path(), &obj, ModelKind::Rigid3d, &cfg, "settings").unwrap();
+    // A release beyond the square in z is still refused.
+    let d = campaign(&release.replace("r4,16,60,12", "r4,16,60,80"), DEPOSITION_3D, BLOCKS);
+    std::fs::write(d.path().join("square.obj"), std::fs::read(&obj).unwrap()).unwrap();
+    let e = match open_model(d.path(), &d.path().join("square.obj"), ModelKind::Rigid3d, &cfg, "settings") {
+        Ok(_) => panic!("opened"),
+        Err(e) => e.to_string(),
+    };
+    assert!(e.contains("r4") && e.contains("not over the terrain"), "{e}");
+}

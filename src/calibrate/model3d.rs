@@ -18,7 +18,7 @@ use crate::rock::RockBody;
 use crate::scenario::{MaterialsBy, TerrainSpec, ZoneSpec};
 use crate::sim::{simulate, Impact, Observer, Sample, SimParams, StopReason};
 use crate::source::measured_release;
-use crate::terrain::{horizontal_to_local, Material, Terrain, UpAxis};
+use crate::terrain::{Material, Terrain, UpAxis};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -123,7 +123,7 @@ impl Model3d {
         let terrain = &model.terrain;
         campaign.check_rest_points(
             |p| {
-                let q = terrain.up.to_internal(p) - terrain.origin;
+                let q = to_local(terrain, p);
                 terrain.surface.at(q.x, q.y).is_some()
             },
             &terrain_extent(terrain),
@@ -160,8 +160,8 @@ impl Model3d {
                     "list the block in block_metadata.csv",
                 ));
             }
-            let p = horizontal_to_local(terrain.up, &terrain.origin, [r.release_m[0], r.release_m[1]]);
-            if terrain.surface.at(p[0], p[1]).is_none() {
+            let p = to_local(&terrain, r.release_m);
+            if terrain.surface.at(p.x, p.y).is_none() {
                 return Err(Error::invalid(
                     format!("run {}", r.trajectory_label()),
                     format!("release point {:?} is not over the terrain", r.release_m),
