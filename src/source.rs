@@ -12,9 +12,9 @@ use crate::terrain::Terrain;
 use crate::terrain::{horizontal_to_local, point_in_polygon};
 use nalgebra::Vector3;
 
-/// Most rocks of a 3D run. Ours: a run keeps about 48 bytes per rock until its end (run-out, time, energy and
-/// bounce for the percentiles, and the stopping point for the end-point density), so 10⁷ rocks hold about 0.5 GB,
-/// and take hours at a few thousand rocks a second: ten times the largest ensembles hazard maps use.
+/// Most rocks of a 3D run. Ours: memory does not grow with the rocks ([`crate::run::StatsAccumulator`],
+/// [`crate::hazard::EndpointDensity`]), but 10⁷ rocks take hours at a few thousand rocks a second: ten times the
+/// largest ensembles hazard maps use. Split a larger ensemble into runs with different seeds.
 pub const MAX_ROCKS: usize = 10_000_000;
 
 #[derive(Debug, Clone)]

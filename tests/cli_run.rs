@@ -282,6 +282,8 @@ fn keys_the_terrain_does_not_use_are_warned_about_and_recorded() {
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["warnings"].as_array().unwrap().len(), 3, "{}", summary["warnings"]);
+    let index = std::fs::read_to_string(out.join("index.html")).unwrap();
+    assert!(index.contains("Warning: [materials.rockfill] is defined"), "index.html lacks the warning");
     // The shipped scenario from the same DEM and nothing unused: no warning.
     let clean = scenario(dir.path(), "", 0.3, "300.0");
     let o = talus().args(["run", clean.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();

@@ -399,7 +399,7 @@ fn envelope_of(
     let first = first.expect("an envelope has members");
     let crs = first.grids[0].crs.clone();
     let dem = maps::dem_for(&first.terrain, &first.grids[0]);
-    let overlays = maps::run_overlays(&first.terrain, &[], &[]);
+    let overlays = maps::run_overlays(&first.terrain, &maps::ThinnedPoints::default(), &[]);
     let n = members.len();
     let mut outputs = Vec::new();
     let ascii = members[0].scenario.file.output.ascii_grids;

@@ -6,6 +6,6 @@ pub mod grid;
 pub mod histogram;
 
 pub use accumulate::{CellTrack, CellVisit, HazardAccumulator};
-pub use density::endpoint_density;
+pub use density::EndpointDensity;
 pub use grid::RasterFrame;
 pub use histogram::LogBins;

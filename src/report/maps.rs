@@ -77,16 +77,54 @@ pub const BARRIER_COLOUR: [u8; 3] = [225, 0, 210];
 /// Colour of collector lines on maps.
 pub const COLLECTOR_COLOUR: [u8; 3] = [20, 20, 20];
 
-/// Overlays of a run: stopped rocks' end points (at most 3000, every k-th), the terrain's barriers and the given
-/// collector lines (labelled when there are at most six lines in all).
+/// Most end points drawn on a run's maps.
+pub const MAX_MAP_POINTS: usize = 3000;
+
+/// Every `step`-th of the points added, `step` doubling whenever more than [`MAX_MAP_POINTS`] would be kept: a
+/// uniform thinning of the stopped rocks' end points for the maps, in memory that does not grow with the run.
+#[derive(Debug, Clone)]
+pub struct ThinnedPoints {
+    /// Points kept (every `step`-th added).
+    pub points: Vec<[f64; 2]>,
+    /// One point kept in `step`.
+    pub step: usize,
+    /// Points added.
+    pub total: usize,
+}
+
+impl Default for ThinnedPoints {
+    fn default() -> Self {
+        ThinnedPoints { points: Vec::new(), step: 1, total: 0 }
+    }
+}
+
+impl ThinnedPoints {
+    /// Adds a point.
+    pub fn add(&mut self, p: [f64; 2]) {
+        if self.total.is_multiple_of(self.step) {
+            self.points.push(p);
+            if self.points.len() > MAX_MAP_POINTS {
+                self.step *= 2;
+                let mut k = 0;
+                self.points.retain(|_| {
+                    k += 1;
+                    (k - 1) % 2 == 0
+                });
+            }
+        }
+        self.total += 1;
+    }
+}
+
+/// Overlays of a run: stopped rocks' end points (`stopped`, at most [`MAX_MAP_POINTS`]), the terrain's barriers
+/// and the given collector lines (labelled when there are at most six lines in all).
 pub fn run_overlays(
     terrain: &Terrain,
-    stopped_xy: &[[f64; 2]],
+    stopped: &ThinnedPoints,
     collectors: &[crate::collector::Collector],
 ) -> Overlays {
-    let step = stopped_xy.len().div_ceil(3000).max(1);
-    let points: Vec<(f64, f64)> =
-        stopped_xy.iter().step_by(step).map(|p| map_xy(terrain, *p)).map(|p| (p[0], p[1])).collect();
+    let points: Vec<(f64, f64)> = stopped.points.iter().map(|p| map_xy(terrain, *p)).map(|p| (p[0], p[1])).collect();
+    let step = stopped.step;
     let label = if step == 1 { "end points".to_string() } else { format!("end points (1 in {step})") };
     let label_lines = terrain.barriers.len() + collectors.len() <= 6;
     let mut lines = Vec::new();
@@ -109,8 +147,8 @@ pub fn run_overlays(
     }
     Overlays {
         points,
-        point_label: (!stopped_xy.is_empty()).then_some(label),
-        point_radius_px: if stopped_xy.len() > 1000 { 1.5 } else { 2.0 },
+        point_label: (stopped.total > 0).then_some(label),
+        point_radius_px: if stopped.total > 1000 { 1.5 } else { 2.0 },
         lines,
         ..Default::default()
     }
@@ -146,4 +184,22 @@ pub fn render(path: &Path, grid: &Grid, style: &Style, dem: Option<&Grid>, overl
         .or_else(|| (style.scale == ValueScale::Log && style.classes.is_none()).then(|| log_range(grid)).flatten());
     layer.transparent_zero = true;
     render_map(path, &layer, dem, overlays)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn thinned_points_keep_every_step_th_and_at_most_the_map_limit() {
+        for n in [0, 1, MAX_MAP_POINTS, MAX_MAP_POINTS + 1, 4 * MAX_MAP_POINTS + 5] {
+            let mut t = ThinnedPoints::default();
+            (0..n).for_each(|i| t.add([i as f64, 0.0]));
+            assert_eq!(t.total, n);
+            assert!(t.points.len() <= MAX_MAP_POINTS, "{n}: {} kept", t.points.len());
+            assert!(t.step.is_power_of_two() && t.step >= n.div_ceil(MAX_MAP_POINTS).max(1), "{n}: step {}", t.step);
+            let expected: Vec<f64> = (0..n).step_by(t.step).map(|i| i as f64).collect();
+            assert_eq!(t.points.iter().map(|p| p[0]).collect::<Vec<_>>(), expected, "{n}");
+        }
+    }
 }

@@ -35,8 +35,8 @@ pub struct RunProducts<'a> {
     pub terrain: &'a Terrain,
     /// The rasters, in [`RASTERS`] order.
     pub grids: &'a [Grid],
-    /// End points of the rocks that stopped, local frame.
-    pub stopped_xy: &'a [[f64; 2]],
+    /// End points of the rocks that stopped, local frame, thinned for the maps.
+    pub stopped_xy: &'a maps::ThinnedPoints,
     /// Recorded paths: (rock index, samples).
     pub paths: &'a [(usize, Vec<Sample>)],
     /// All collectors (the scenario's first).

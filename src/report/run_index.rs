@@ -112,6 +112,9 @@ pub fn write_run_index(p: &RunProducts, summary: &RunSummary) -> Result<()> {
     );
     let mut page = Page::new(&title, &sub);
     page.h2("Summary");
+    for w in &summary.warnings {
+        page.note(&format!("Warning: {w}"));
+    }
     page.raw(&summary_html(summary));
     page.h2("Maps");
     let descriptions: Vec<(&str, &str)> = RASTERS.iter().chain(ZONE_RASTERS.iter()).copied().collect();
