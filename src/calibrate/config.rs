@@ -727,16 +727,16 @@ impl CalibrationConfig {
     /// # Errors
     /// A table of the other model differs from its defaults: an error naming it, with the table to use.
     pub fn check_model_tables(&self, model: ModelKind, source: &str) -> Result<()> {
-        let set = |v: serde_json::Result<serde_json::Value>, d: serde_json::Result<serde_json::Value>| v.ok() != d.ok();
+        fn differs<T: Serialize>(a: &T, b: &T) -> bool {
+            serde_json::to_value(a).ok() != serde_json::to_value(b).ok()
+        }
         let unused = match model {
-            ModelKind::Lumped2d => [
-                ("simulation", set(serde_json::to_value(&self.simulation), serde_json::to_value(SimParams::default()))),
-                ("terrain", set(serde_json::to_value(&self.terrain), serde_json::to_value(TerrainMap::default()))),
-            ]
-            .into_iter()
-            .find(|(_, s)| *s)
-            .map(|(t, _)| (t, "options2d")),
-            ModelKind::Rigid3d => (self.options2d != Options2d::default()).then_some(("options2d", "simulation")),
+            ModelKind::Lumped2d if differs(&self.simulation, &SimParams::default()) => {
+                Some(("simulation", "options2d"))
+            }
+            ModelKind::Lumped2d if differs(&self.terrain, &TerrainMap::default()) => Some(("terrain", "options2d")),
+            ModelKind::Rigid3d if self.options2d != Options2d::default() => Some(("options2d", "simulation")),
+            _ => None,
         };
         match unused {
             None => Ok(()),

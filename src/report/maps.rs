@@ -105,11 +105,7 @@ impl ThinnedPoints {
             self.points.push(p);
             if self.points.len() > MAX_MAP_POINTS {
                 self.step *= 2;
-                let mut k = 0;
-                self.points.retain(|_| {
-                    k += 1;
-                    (k - 1) % 2 == 0
-                });
+                self.points = self.points.iter().step_by(2).copied().collect();
             }
         }
         self.total += 1;
