@@ -24,6 +24,7 @@ pub fn read_terrain_file(path: &Path) -> Result<(MeshData, Crs)> {
             } else {
                 crate::io::geotiff::read_grid(path)?
             };
+            super::dem_check::check_dem(path, &grid)?;
             let mesh = grid_to_mesh(&grid, &stem);
             if mesh.triangles.is_empty() {
                 return Err(Error::format(

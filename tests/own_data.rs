@@ -1,0 +1,203 @@
+//! "Bring your own data": the terrain files an engineer arrives with (GeoTIFFs and ESRI ASCII grids exported by
+//! GDAL or a GIS, meshes from survey or modelling tools) and the mistakes in them that used to run to the end and
+//! write wrong numbers: a DEM in degrees or feet, nodata cells nobody declared, full-precision coordinates read
+//! as f32. Each is refused before any work with exit code 2 and no output, or read right. Fixtures are built in
+//! temp dirs.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use talus::io::geotiff;
+use talus::raster::{Crs, GeoKeys, Grid};
+
+fn talus() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_talus"))
+}
+
+/// A 30 × 20 DEM of 2 m cells in a national grid (large coordinates): a 35° slope falling toward −x onto a floor.
+fn slope_grid() -> Grid {
+    let (nc, nr, cell) = (30usize, 20usize, 2.0);
+    let mut g = Grid::filled(nc, nr, 248_000.0, 352_040.0, cell, 0.0);
+    for r in 0..nr {
+        for c in 0..nc {
+            let x = (c as f64 + 0.5) * cell;
+            let z = if x > 20.0 { (x - 20.0) * 35f64.to_radians().tan() } else { 0.0 };
+            g.values[r * nc + c] = (1500.0 + z) as f32;
+        }
+    }
+    g
+}
+
+/// The grid as an ESRI ASCII grid, with `nodata_line` (e.g. `NODATA_value -9999`, or empty) in its header.
+fn ascii_text(g: &Grid, cell_text: &str, nodata_line: &str) -> String {
+    let mut s = format!(
+        "ncols {}\nnrows {}\nxllcorner {}\nyllcorner {}\ncellsize {cell_text}\n{nodata_line}\n",
+        g.ncols,
+        g.nrows,
+        g.x_min_m,
+        g.y_max_m - g.nrows as f64 * g.cell_y_m
+    );
+    for r in 0..g.nrows {
+        let row: Vec<String> = (0..g.ncols).map(|c| format!("{}", g.values[r * g.ncols + c])).collect();
+        s.push_str(&row.join(" "));
+        s.push('\n');
+    }
+    s
+}
+
+/// A scenario on `terrain` (relative to `dir`) releasing 12 rocks from a point on the slope.
+fn scenario(dir: &Path, terrain: &str, release: [f64; 2]) -> PathBuf {
+    let text = format!(
+        r#"
+[terrain]
+files = ["{terrain}"]
+
+[materials.default]
+preset = "face_all"
+
+[[sources]]
+type = "point"
+points = [[{}, {}]]
+count = 12
+
+[rocks]
+shapes = ["cube"]
+mass_kg = 200.0
+
+[output]
+cell_size_m = 4.0
+"#,
+        release[0], release[1]
+    );
+    let p = dir.join("scenario.toml");
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn run(scenario: &Path, out: &Path) -> Output {
+    talus().arg("run").arg(scenario).arg("--out").arg(out).arg("--threads").arg("1").output().unwrap()
+}
+
+/// Asserts that the run was refused with exit code 2, that stderr holds every one of `needles`, and that nothing
+/// was written.
+fn assert_refused(o: &Output, out: &Path, needles: &[&str]) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "expected exit code 2; stderr: {err}");
+    for n in needles {
+        assert!(err.contains(n), "stderr lacks {n:?}: {err}");
+    }
+    assert!(err.contains("how to fix"), "{err}");
+    let written = std::fs::read_dir(out).map(|d| d.count()).unwrap_or(0);
+    assert_eq!(written, 0, "a refused run wrote {written} files");
+}
+
+const RELEASE: [f64; 2] = [248_050.0, 352_020.0];
+
+#[test]
+fn geotiff_dem_in_degrees_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    // What `gdalwarp -t_srs EPSG:4326` writes: a geographic model; cells of 1/1200 degree.
+    let mut g = slope_grid();
+    (g.x_min_m, g.y_max_m, g.cell_x_m, g.cell_y_m) = (11.33, 47.05, 1.0 / 1200.0, 1.0 / 1200.0);
+    g.crs = Crs {
+        epsg: Some(4326),
+        geokeys: Some(GeoKeys { directory: vec![1, 1, 0, 2, 1024, 0, 1, 2, 2048, 0, 1, 4326], ..Default::default() }),
+        wkt: None,
+    };
+    geotiff::write_grid(&dir.path().join("dem.tif"), &g).unwrap();
+    let sc = scenario(dir.path(), "dem.tif", [11.34, 47.04]);
+    let out = dir.path().join("out");
+    let o = run(&sc, &out);
+    assert_refused(&o, &out, &["dem.tif", "geographic", "EPSG:4326", "gdalwarp -t_srs"]);
+}
+
+#[test]
+fn geotiff_dem_in_us_feet_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = slope_grid();
+    // NAD83 / New York Long Island (ftUS), as GDAL writes it: ProjLinearUnitsGeoKey = 9003.
+    g.crs = Crs {
+        epsg: Some(2263),
+        geokeys: Some(GeoKeys {
+            directory: vec![1, 1, 0, 3, 1024, 0, 1, 1, 3072, 0, 1, 2263, 3076, 0, 1, 9003],
+            ..Default::default()
+        }),
+        wkt: None,
+    };
+    geotiff::write_grid(&dir.path().join("dem.tif"), &g).unwrap();
+    let sc = scenario(dir.path(), "dem.tif", RELEASE);
+    let out = dir.path().join("out");
+    let o = run(&sc, &out);
+    assert_refused(&o, &out, &["dem.tif", "US survey foot", "9003"]);
+
+    // The same grid in a metre CRS runs.
+    g.crs = Crs::epsg(31287);
+    geotiff::write_grid(&dir.path().join("dem.tif"), &g).unwrap();
+    let o = run(&sc, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn ascii_dem_with_a_geographic_or_foot_prj_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = slope_grid();
+    std::fs::write(dir.path().join("dem.asc"), ascii_text(&g, "2", "NODATA_value -9999")).unwrap();
+    let sc = scenario(dir.path(), "dem.asc", RELEASE);
+    let out = dir.path().join("out");
+    // What GDAL writes beside an AAIGrid in EPSG:2263 (ESRI WKT, no EPSG code).
+    std::fs::write(
+        dir.path().join("dem.prj"),
+        r#"PROJCS["NAD_1983_StatePlane_New_York_Long_Island_FIPS_3104_Feet",GEOGCS["GCS_North_American_1983",DATUM["D_North_American_1983",SPHEROID["GRS_1980",6378137.0,298.257222101]],PRIMEM["Greenwich",0.0],UNIT["Degree",0.0174532925199433]],PROJECTION["Lambert_Conformal_Conic"],PARAMETER["False_Easting",984250.0],UNIT["Foot_US",0.3048006096012192]]"#,
+    )
+    .unwrap();
+    assert_refused(&run(&sc, &out), &out, &["dem.asc", "Foot_US", "not the metre"]);
+    std::fs::write(
+        dir.path().join("dem.prj"),
+        r#"GEOGCS["GCS_WGS_1984",DATUM["D_WGS_1984",SPHEROID["WGS_1984",6378137.0,298.257223563]],PRIMEM["Greenwich",0.0],UNIT["Degree",0.0174532925199433]]"#,
+    )
+    .unwrap();
+    assert_refused(&run(&sc, &out), &out, &["dem.asc", "geographic"]);
+    // The .prj of avaGar (ESRI WKT, metres) is fine.
+    std::fs::write(
+        dir.path().join("dem.prj"),
+        r#"PROJCS["MGI_Austria_Lambert",GEOGCS["GCS_MGI",DATUM["D_MGI",SPHEROID["Bessel_1841",6377397.155,299.1528128]],PRIMEM["Greenwich",0.0],UNIT["Degree",0.0174532925199433]],PROJECTION["Lambert_Conformal_Conic"],PARAMETER["False_Easting",400000.0],UNIT["Meter",1.0]]"#,
+    )
+    .unwrap();
+    let o = run(&sc, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn ascii_dem_in_degrees_without_a_crs_is_refused_by_its_slope() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = slope_grid();
+    let mut text = ascii_text(&g, "0.000833333", "NODATA_value -9999");
+    text = text.replace("xllcorner 248000", "xllcorner 11.33").replace("yllcorner 352000", "yllcorner 47.03");
+    std::fs::write(dir.path().join("dem.asc"), text).unwrap();
+    let sc = scenario(dir.path(), "dem.asc", [11.34, 47.04]);
+    let out = dir.path().join("out");
+    assert_refused(&run(&sc, &out), &out, &["dem.asc", "median slope", "degrees", "gdalwarp"]);
+}
+
+#[test]
+fn undeclared_nodata_cells_are_refused_not_read_as_a_pit() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut g = slope_grid();
+    // A hole on the floor, below the release.
+    for r in 8..12 {
+        for c in 2..6 {
+            g.values[r * g.ncols + c] = -9999.0;
+        }
+    }
+    let out = dir.path().join("out");
+    let sc = scenario(dir.path(), "dem.asc", RELEASE);
+    // No NODATA_value line at all.
+    std::fs::write(dir.path().join("dem.asc"), ascii_text(&g, "2", "")).unwrap();
+    assert_refused(&run(&sc, &out), &out, &["dem.asc", "16 of 600 cells hold -9999", "NODATA_value -9999"]);
+    // Another nodata value declared (an Int16 export with -32768) than the one the hole holds.
+    std::fs::write(dir.path().join("dem.asc"), ascii_text(&g, "2", "NODATA_value -32768")).unwrap();
+    assert_refused(&run(&sc, &out), &out, &["16 of 600 cells hold -9999"]);
+    // Declared: the hole is a hole, and the run goes.
+    std::fs::write(dir.path().join("dem.asc"), ascii_text(&g, "2", "NODATA_value -9999")).unwrap();
+    let o = run(&sc, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
