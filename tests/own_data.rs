@@ -201,3 +201,38 @@ fn undeclared_nodata_cells_are_refused_not_read_as_a_pit() {
     let o = run(&sc, &out);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+#[test]
+fn ascii_grid_and_obj_with_a_byte_order_mark_and_crlf_read_as_without() {
+    use talus::io::{ascii_grid, obj};
+    let dir = tempfile::tempdir().unwrap();
+    let g = slope_grid();
+    let plain = ascii_text(&g, "2", "NODATA_value -9999");
+    std::fs::write(dir.path().join("plain.asc"), &plain).unwrap();
+    std::fs::write(dir.path().join("bom.asc"), format!("\u{feff}{}", plain.replace('\n', "\r\n"))).unwrap();
+    let a = ascii_grid::read_grid(&dir.path().join("plain.asc")).unwrap();
+    let b = ascii_grid::read_grid(&dir.path().join("bom.asc")).unwrap();
+    assert_eq!(a, b);
+    // An OBJ whose first line is a vertex: the mark used to hide it and shift every face index by one.
+    let mesh = "v 0 0 0\nv 10 0 0\nv 10 10 1\nv 0 10 1\nf 1 2 3\nf 1 3 4\n";
+    std::fs::write(dir.path().join("plain.obj"), mesh).unwrap();
+    std::fs::write(dir.path().join("bom.obj"), format!("\u{feff}{}", mesh.replace('\n', "\r\n"))).unwrap();
+    let a = obj::read_obj(&dir.path().join("plain.obj")).unwrap();
+    let b = obj::read_obj(&dir.path().join("bom.obj")).unwrap();
+    assert_eq!(a, b);
+}
+
+#[test]
+fn ascii_nodata_matches_at_the_precision_heights_are_kept() {
+    // The float32 lowest value, written once by a tool that prints f32 and once in full by another.
+    let dir = tempfile::tempdir().unwrap();
+    let g = slope_grid();
+    let mut text = ascii_text(&g, "2", "NODATA_value -3.4028235e+38");
+    let first_value = format!("{}", g.values[0]);
+    text = text.replacen(&format!("\n{first_value} "), "\n-3.4028234663852886e+38 ", 1);
+    let p = dir.path().join("dem.asc");
+    std::fs::write(&p, text).unwrap();
+    let read = talus::io::ascii_grid::read_grid(&p).unwrap();
+    assert!(read.values[0].is_nan(), "read {}", read.values[0]);
+    assert_eq!(read.count_valid(), g.values.len() - 1);
+}
