@@ -236,3 +236,37 @@ fn ascii_nodata_matches_at_the_precision_heights_are_kept() {
     assert!(read.values[0].is_nan(), "read {}", read.values[0]);
     assert_eq!(read.count_valid(), g.values.len() - 1);
 }
+
+#[test]
+fn ascii_stl_keeps_full_precision_map_coordinates() {
+    // A 0.7 m mesh at a UTM northing of 7.5 million metres, where f32 steps are 0.5 m.
+    let dir = tempfile::tempdir().unwrap();
+    let (e0, n0, s) = (500_000.37, 7_500_000.41, 0.7);
+    let corner = |i: usize, j: usize| [e0 + i as f64 * s, n0 + j as f64 * s, 1000.0 + 0.7 * j as f64 * s];
+    let mut text = String::from("solid survey\n");
+    for (i, j) in [(0, 0), (1, 0), (0, 1)] {
+        let [a, b, c] = [corner(i, j), corner(i + 1, j), corner(i + 1, j + 1)];
+        let [d, e, f] = [corner(i, j), corner(i + 1, j + 1), corner(i, j + 1)];
+        for t in [[a, b, c], [d, e, f]] {
+            text.push_str("facet normal 0 0 1\nouter loop\n");
+            for v in t {
+                text.push_str(&format!("vertex {:.4} {:.4} {:.4}\n", v[0], v[1], v[2]));
+            }
+            text.push_str("endloop\nendfacet\n");
+        }
+    }
+    text.push_str("endsolid survey\n");
+    let p = dir.path().join("survey.stl");
+    std::fs::write(&p, text).unwrap();
+    let mesh = talus::io::stl::read_stl(&p).unwrap();
+    assert_eq!(mesh.triangles.len(), 6);
+    // Three cells in an L share 8 corners.
+    assert_eq!(mesh.vertices.len(), 8);
+    for v in &mesh.vertices {
+        let (i, j) = (((v[0] - e0) / s).round() as usize, ((v[1] - n0) / s).round() as usize);
+        let want = corner(i, j);
+        for k in 0..3 {
+            assert!((v[k] - want[k]).abs() < 1e-6, "vertex {v:?} should be {want:?}");
+        }
+    }
+}
