@@ -270,3 +270,36 @@ fn ascii_stl_keeps_full_precision_map_coordinates() {
         }
     }
 }
+
+#[test]
+fn adjacent_dem_tiles_form_one_surface_without_a_seam() {
+    // The slope cut into a west and an east tile along x = 248,030 m (on the slope): the tiles' outer cell centres
+    // are 2 m apart, and that strip had no surface, so rocks rolling down "left the terrain" there.
+    let dir = tempfile::tempdir().unwrap();
+    let g = slope_grid();
+    let half = |c0: usize| {
+        let mut t = Grid::filled(15, g.nrows, g.x_min_m + c0 as f64 * g.cell_x_m, g.y_max_m, g.cell_x_m, 0.0);
+        for r in 0..g.nrows {
+            t.values[r * 15..(r + 1) * 15].copy_from_slice(&g.values[r * g.ncols + c0..r * g.ncols + c0 + 15]);
+        }
+        t
+    };
+    std::fs::write(dir.path().join("west.asc"), ascii_text(&half(0), "2", "NODATA_value -9999")).unwrap();
+    std::fs::write(dir.path().join("east.asc"), ascii_text(&half(15), "2", "NODATA_value -9999")).unwrap();
+    let sc = scenario(dir.path(), "west.asc\", \"east.asc", [248_055.0, 352_020.0]);
+    let out = dir.path().join("out");
+    let o = run(&sc, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let endpoints = std::fs::read_to_string(out.join("endpoints.csv")).unwrap();
+    let at_seam: Vec<&str> = endpoints
+        .lines()
+        .skip(1)
+        .filter(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            let x: f64 = f[7].parse().unwrap();
+            f[10] == "left_terrain" && (x - 248_030.0).abs() < 3.0
+        })
+        .collect();
+    assert!(at_seam.is_empty(), "rocks left the terrain at the seam between the tiles: {at_seam:?}");
+    assert_eq!(endpoints.lines().count(), 13);
+}
