@@ -303,3 +303,35 @@ fn adjacent_dem_tiles_form_one_surface_without_a_seam() {
     assert!(at_seam.is_empty(), "rocks left the terrain at the seam between the tiles: {at_seam:?}");
     assert_eq!(endpoints.lines().count(), 13);
 }
+
+#[test]
+fn ascii_dem_with_a_prj_says_how_to_georeference_the_geotiffs() {
+    let dir = tempfile::tempdir().unwrap();
+    let g = slope_grid();
+    std::fs::write(dir.path().join("dem.asc"), ascii_text(&g, "2", "NODATA_value -9999")).unwrap();
+    std::fs::write(
+        dir.path().join("dem.prj"),
+        r#"PROJCS["MGI_Austria_Lambert",GEOGCS["GCS_MGI",DATUM["D_MGI",SPHEROID["Bessel_1841",6377397.155,299.1528128]],PRIMEM["Greenwich",0.0],UNIT["Degree",0.0174532925199433]],PROJECTION["Lambert_Conformal_Conic"],UNIT["Meter",1.0]]"#,
+    )
+    .unwrap();
+    let sc = scenario(dir.path(), "dem.asc", RELEASE);
+    let out = dir.path().join("out");
+    let o = run(&sc, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("GeoTIFFs will carry no CRS") && err.contains("dem.prj") && err.contains("crs_epsg"), "{err}");
+    assert_eq!(geotiff::read_grid(&out.join("reach_probability.tif")).unwrap().crs.epsg, None);
+
+    // With the code given: no note, and the rasters carry it, over the DEM's extent.
+    let text = std::fs::read_to_string(&sc).unwrap().replace("[terrain]\n", "[terrain]\ncrs_epsg = 31287\n");
+    std::fs::write(&sc, text).unwrap();
+    let o = run(&sc, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("note:"));
+    let r = geotiff::read_grid(&out.join("reach_probability.tif")).unwrap();
+    assert_eq!(r.crs.epsg, Some(31287));
+    let (first_x, first_y) = g.cell_centre(0, 0);
+    let (last_x, last_y) = g.cell_centre(g.ncols - 1, g.nrows - 1);
+    assert!(r.x_min_m <= first_x && r.x_min_m + r.ncols as f64 * r.cell_x_m >= last_x, "{r:?}");
+    assert!(r.y_max_m >= first_y && r.y_max_m - r.nrows as f64 * r.cell_y_m <= last_y);
+}
