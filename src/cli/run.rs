@@ -35,6 +35,14 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     let mut sc = super::read_3d(&a.scenario, "run")?.resolve(&a.scenario)?;
     sc.file.output.ascii_grids |= a.ascii_grids;
     let overrides = a.control.overrides(a.paths);
+    if let Some(prj) = prj_without_geotiff_crs(&sc) {
+        eprintln!(
+            "note: the GeoTIFFs will carry no CRS: {} holds it as WKT, which talus cannot turn into GeoTIFF keys \
+             without a CRS database; set `crs_epsg = <code>` in [terrain] (e.g. 31287 for MGI / Austria Lambert) \
+             so that a GIS places them (--ascii-grids copies the .prj)",
+            prj.display()
+        );
+    }
     let pb = progress::bar(0, "rocks");
     let progress = |done: usize, total: usize| {
         if done == 1 {
@@ -89,4 +97,21 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         a.out.join("index.html").display()
     );
     Ok(())
+}
+
+/// The `.prj` of an ESRI ASCII DEM when it is the only CRS the run's GeoTIFFs could have had: no `crs_epsg` in the
+/// scenario and no GeoTIFF DEM (whose GeoKeys would be passed through).
+fn prj_without_geotiff_crs(sc: &talus::scenario::Scenario) -> Option<PathBuf> {
+    if sc.file.terrain.crs_epsg.is_some() {
+        return None;
+    }
+    let ext = |p: &std::path::Path| p.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    if sc.terrain_files.iter().any(|p| matches!(ext(p).as_str(), "tif" | "tiff")) {
+        return None;
+    }
+    sc.terrain_files
+        .iter()
+        .filter(|p| ext(p) == "asc")
+        .flat_map(|p| [p.with_extension("prj"), p.with_extension("PRJ")])
+        .find(|p| p.is_file())
 }

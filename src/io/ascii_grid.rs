@@ -12,8 +12,10 @@
 //! ```
 //! Header keys are case-insensitive and may come in any order: `ncols`, `nrows`, `xllcorner` or `xllcenter`,
 //! `yllcorner` or `yllcenter`, `cellsize` (or `dx` and `dy` for rectangular cells) and the optional
-//! `nodata_value`. Values are separated by any whitespace, with any line breaks. A `.prj` file with the same stem
-//! holds the CRS as WKT; it is read into [`Crs::wkt`] and written back from it.
+//! `nodata_value`. Values are separated by any whitespace, with any line breaks (LF or CRLF); a leading UTF-8
+//! byte-order mark is skipped. A value is nodata when it equals the nodata value at `f32` precision, the precision
+//! heights are kept at (so `-3.4028235e+38` in the header matches `-3.4028234663852886e+38` in the data). A `.prj`
+//! file with the same stem holds the CRS as WKT; it is read into [`Crs::wkt`] and written back from it.
 
 use crate::error::{Error, Result};
 use crate::io::grid_check::check_writable;
@@ -33,6 +35,8 @@ const KEYS: [&str; 10] =
 pub fn read_grid(path: &Path) -> Result<Grid> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let text = String::from_utf8_lossy(&bytes);
+    // A byte-order mark (Windows editors write one) would glue itself to the first header key.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut lines = text.split('\n').enumerate().map(|(i, l)| (i + 1, l)).peekable();
 
     // Header: lines whose first token is a key (not a number).
@@ -163,7 +167,7 @@ pub fn read_grid(path: &Path) -> Result<Grid> {
                     "fix the value; mark missing data with the NODATA_value",
                 )
             })?;
-            values.push(if v.is_nan() || Some(v) == nodata { f32::NAN } else { v as f32 });
+            values.push(if v.is_nan() || nodata.is_some_and(|nd| v as f32 == nd as f32) { f32::NAN } else { v as f32 });
         }
     }
     if let Some(line) = first_extra_line {

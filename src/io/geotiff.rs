@@ -295,6 +295,33 @@ fn epsg_of(keys: &[KeyEntry]) -> Option<u32> {
     code.filter(|&c| c != 0 && c != USER_DEFINED).map(u32::from)
 }
 
+/// EPSG unit codes named in messages (ProjLinearUnitsGeoKey values).
+const UNIT_NAMES: [(u16, &str); 4] =
+    [(9001, "metre"), (9002, "international foot"), (9003, "US survey foot"), (9030, "international nautical mile")];
+
+/// Why the horizontal coordinates of a GeoTIFF with this GeoKey directory are not metres, if its keys say so: a
+/// geographic model (GTModelType 2: degrees) or a projected one whose ProjLinearUnitsGeoKey is not the metre.
+/// `None` when the keys name metres or say nothing about the unit (a bare ProjectedCSType code: its unit would
+/// need the EPSG database, which talus does not carry).
+pub fn non_metre_units(directory: &[u16]) -> Option<String> {
+    let keys = parse_directory(directory)?;
+    if key_value(&keys, KEY_MODEL_TYPE) == Some(2) {
+        let code = key_value(&keys, KEY_GEOGRAPHIC_TYPE).filter(|&c| c != 0 && c != USER_DEFINED);
+        return Some(format!(
+            "its CRS is geographic ({}GTModelTypeGeoKey = 2): the coordinates are degrees of latitude and \
+             longitude, not metres",
+            code.map_or(String::new(), |c| format!("EPSG:{c}, "))
+        ));
+    }
+    match key_value(&keys, KEY_PROJ_LINEAR_UNITS) {
+        Some(unit) if unit != UNIT_METRE && unit != 0 && unit != USER_DEFINED => {
+            let name = UNIT_NAMES.iter().find(|u| u.0 == unit).map_or("a unit other than the metre", |u| u.1);
+            Some(format!("its projected CRS is in {name} (ProjLinearUnitsGeoKey = {unit}), not metres"))
+        }
+        _ => None,
+    }
+}
+
 /// Parses a GDAL_NODATA string; `nan` in any case or sign is NaN (no value matches it, so NaN cells stay NaN).
 fn parse_nodata(text: &str) -> Option<f64> {
     let t = text.trim();

@@ -36,7 +36,9 @@ pub const DEFAULT_GROUP: &str = "default";
 pub fn read_obj(path: &Path) -> Result<MeshData> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     let text = String::from_utf8_lossy(&bytes);
-    let scan = prescan(path, &text)?;
+    // A byte-order mark (Windows editors write one) would hide a first `v` line and shift every face index.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    let scan = prescan(path, text)?;
     if scan.faces.is_empty() {
         return Err(Error::format(
             path.display().to_string(),
@@ -54,7 +56,7 @@ pub fn read_obj(path: &Path) -> Result<MeshData> {
 
     // tobj parses the text with polylines blanked and vertex colours dropped (line numbers kept).
     let tobj_text: Cow<str> = if scan.rewrites.is_empty() {
-        Cow::Borrowed(&text)
+        Cow::Borrowed(text)
     } else {
         let mut rewrites = scan.rewrites.iter().peekable();
         let mut out = String::with_capacity(text.len());

@@ -4,14 +4,16 @@
 //! the 80-byte header starts with `solid`, as some exporters write). Otherwise it is ASCII if it starts with
 //! `solid`, and a truncated or padded binary file if not.
 //!
-//! ASCII files are checked line by line first (structure, numbers, finite vertices; a file that stops inside a
-//! facet is reported with the line where that facet starts), then handed to `stl_io` in a canonical form, so that
-//! a bare `solid` first line, a missing `endsolid` or a `nan` normal do not trip it. Binary files are checked for
-//! non-finite vertices before parsing. Coordinates are `f32` in STL; `stl_io` merges bit-identical vertices.
+//! ASCII files are read line by line by our own parser (structure, numbers, finite vertices; a file that stops
+//! inside a facet is reported with the line where that facet starts; a bare `solid` first line, a missing
+//! `endsolid` or a `nan` normal are fine). Their coordinates are read as `f64`, as written: an exporter that writes
+//! full-precision map coordinates (a UTM northing of 7,500,000.41 m, say) keeps them, where `f32` would round them
+//! to steps of 0.5 m. Binary files hold `f32` coordinates; they are checked for non-finite vertices and parsed by
+//! `stl_io`. Both merge bit-identical vertices.
 
 use crate::error::{Error, Result};
 use crate::io::MeshData;
-use std::fmt::Write as _;
+use std::collections::HashMap;
 use std::io::Cursor;
 use std::path::Path;
 
@@ -29,15 +31,15 @@ pub fn read_stl(path: &Path) -> Result<MeshData> {
     let is_binary = binary_count
         .is_some_and(|n| n.checked_mul(BINARY_TRIANGLE_BYTES).map(|b| b + BINARY_HEADER_BYTES) == Some(bytes.len()));
 
-    let parse_input = if is_binary {
+    let (vertices, triangles) = if is_binary {
         check_binary(path, &bytes)?;
         // stl_io treats a file whose first line starts with "solid " as ASCII: hide that word in the header.
         if bytes.starts_with(b"solid") {
             bytes[..5].copy_from_slice(b"SOLID");
         }
-        bytes
+        read_binary(path, bytes)?
     } else if starts_with_solid(&bytes) {
-        canonical_ascii(path, &String::from_utf8_lossy(&bytes))?.into_bytes()
+        read_ascii(path, &String::from_utf8_lossy(&bytes))?
     } else {
         return Err(match binary_count {
             Some(n) => Error::format(
@@ -61,26 +63,6 @@ pub fn read_stl(path: &Path) -> Result<MeshData> {
         });
     };
 
-    let mesh = stl_io::read_stl(&mut Cursor::new(parse_input)).map_err(|e| {
-        Error::format(loc.clone(), format!("the STL parser (stl_io) failed: {e}"), "export the mesh again as STL")
-    })?;
-    if mesh.faces.is_empty() {
-        return Err(Error::format(loc, "the STL has no triangles", "export the surface with its faces"));
-    }
-    let vertices: Vec<[f64; 3]> = mesh.vertices.iter().map(|v| v.0.map(f64::from)).collect();
-    let triangles: Result<Vec<[u32; 3]>> = mesh
-        .faces
-        .iter()
-        .map(|f| {
-            let mut t = [0u32; 3];
-            for (k, &i) in f.vertices.iter().enumerate() {
-                t[k] = u32::try_from(i)
-                    .map_err(|_| Error::format(loc.clone(), "more than 2^32 vertices", "decimate the mesh"))?;
-            }
-            Ok(t)
-        })
-        .collect();
-    let triangles = triangles?;
     let n = triangles.len();
     let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "stl".to_string());
     Ok(MeshData {
@@ -91,6 +73,34 @@ pub fn read_stl(path: &Path) -> Result<MeshData> {
         material: vec![0; n],
         material_names: vec![String::new()],
     })
+}
+
+/// A parsed STL: vertices and triangles (indices into them).
+type Parsed = (Vec<[f64; 3]>, Vec<[u32; 3]>);
+
+/// Parses a checked binary STL with `stl_io`: vertices (f32 widened) and triangles.
+fn read_binary(path: &Path, bytes: Vec<u8>) -> Result<Parsed> {
+    let loc = path.display().to_string();
+    let mesh = stl_io::read_stl(&mut Cursor::new(bytes)).map_err(|e| {
+        Error::format(loc.clone(), format!("the STL parser (stl_io) failed: {e}"), "export the mesh again as STL")
+    })?;
+    if mesh.faces.is_empty() {
+        return Err(Error::format(loc, "the STL has no triangles", "export the surface with its faces"));
+    }
+    let vertices: Vec<[f64; 3]> = mesh.vertices.iter().map(|v| v.0.map(f64::from)).collect();
+    let triangles = mesh
+        .faces
+        .iter()
+        .map(|f| {
+            let mut t = [0u32; 3];
+            for (k, &i) in f.vertices.iter().enumerate() {
+                t[k] = u32::try_from(i)
+                    .map_err(|_| Error::format(loc.clone(), "more than 2^32 vertices", "decimate the mesh"))?;
+            }
+            Ok(t)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    Ok((vertices, triangles))
 }
 
 /// True if the first word of the file is `solid`.
@@ -131,14 +141,15 @@ fn check_binary(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
-/// Checks an ASCII STL line by line and rewrites it in the canonical form `stl_io` expects.
-fn canonical_ascii(path: &Path, text: &str) -> Result<String> {
+/// Reads an ASCII STL line by line: vertices in `f64` as written (bit-identical ones merged, in first-seen order)
+/// and triangles.
+fn read_ascii(path: &Path, text: &str) -> Result<Parsed> {
     let mut lines = text.split('\n').enumerate().map(|(i, l)| (i + 1, l.split_whitespace().collect::<Vec<_>>()));
     let mut lines = lines.by_ref().filter(|(_, t)| !t.is_empty());
-    let mut out = String::with_capacity(text.len());
-    out.push_str("solid talus\n");
+    let mut vertices: Vec<[f64; 3]> = Vec::new();
+    let mut index: HashMap<[u64; 3], u32> = HashMap::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
     lines.next(); // the `solid name` line, checked by the caller
-    let mut n_facets = 0usize;
     let mut last_line = 1;
     // A missing `endsolid` is tolerated.
     while let Some((line_no, tokens)) = lines.next() {
@@ -184,8 +195,8 @@ fn canonical_ascii(path: &Path, text: &str) -> Result<String> {
             }
         };
         expect("outer")?;
-        out.push_str("facet normal 0 0 0\nouter loop\n");
-        for _ in 0..3 {
+        let mut tri = [0u32; 3];
+        for corner in &mut tri {
             let (l, t) = expect("vertex")?;
             if t.len() != 4 {
                 return Err(Error::at_line(
@@ -195,9 +206,9 @@ fn canonical_ascii(path: &Path, text: &str) -> Result<String> {
                     "write it as `vertex x y z`",
                 ));
             }
-            out.push_str("vertex");
+            let mut v = [0.0f64; 3];
             for (k, tok) in t[1..].iter().enumerate() {
-                let c: f32 = tok.parse().map_err(|_| {
+                let c: f64 = tok.parse().map_err(|_| {
                     Error::at_line(path, l, format!("'{tok}' is not a number"), "write it as `vertex x y z`")
                 })?;
                 if !c.is_finite() {
@@ -208,20 +219,24 @@ fn canonical_ascii(path: &Path, text: &str) -> Result<String> {
                         "fix the mesh in the modelling tool and export it again",
                     ));
                 }
-                let _ = write!(out, " {c:?}");
+                v[k] = c;
             }
-            out.push('\n');
+            let next = u32::try_from(vertices.len())
+                .map_err(|_| Error::at_line(path, l, "more than 2^32 vertices", "decimate the mesh"))?;
+            // `+ 0.0` makes −0 and 0 one vertex.
+            *corner = *index.entry(v.map(|c| (c + 0.0).to_bits())).or_insert_with(|| {
+                vertices.push(v);
+                next
+            });
         }
         expect("endloop")?;
         expect("endfacet")?;
-        out.push_str("endloop\nendfacet\n");
-        n_facets += 1;
+        triangles.push(tri);
     }
-    if n_facets == 0 {
+    if triangles.is_empty() {
         return Err(Error::at_line(path, last_line, "the STL has no facets", "export the surface with its faces"));
     }
-    out.push_str("endsolid talus\n");
-    Ok(out)
+    Ok((vertices, triangles))
 }
 
 #[cfg(test)]

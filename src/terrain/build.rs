@@ -13,30 +13,41 @@ use std::path::{Path, PathBuf};
 /// Reads one terrain file by its extension: `.obj`, `.stl`, `.tif`/`.tiff` (GeoTIFF DEM) or `.asc` (ESRI ASCII
 /// DEM). DEMs are triangulated; their CRS is returned too.
 pub fn read_terrain_file(path: &Path) -> Result<(MeshData, Crs)> {
+    match read_terrain_part(path)? {
+        TerrainPart::Mesh(mesh) => Ok((mesh, Crs::default())),
+        TerrainPart::Dem(grid) => Ok((dem_mesh(path, &grid, None)?, grid.crs)),
+    }
+}
+
+/// A terrain file as read: a mesh, or a DEM grid not yet triangulated (so that DEM tiles can be joined first).
+enum TerrainPart {
+    Mesh(MeshData),
+    Dem(Grid),
+}
+
+impl TerrainPart {
+    fn dem(&self) -> Option<&Grid> {
+        match self {
+            TerrainPart::Dem(g) => Some(g),
+            TerrainPart::Mesh(_) => None,
+        }
+    }
+}
+
+/// Reads a terrain file by its extension; DEMs are checked ([`super::dem_check`]) but not triangulated.
+fn read_terrain_part(path: &Path) -> Result<TerrainPart> {
     let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     match ext.as_str() {
-        "obj" => Ok((crate::io::obj::read_obj(path)?, Crs::default())),
-        "stl" => Ok((crate::io::stl::read_stl(path)?, Crs::default())),
+        "obj" => Ok(TerrainPart::Mesh(crate::io::obj::read_obj(path)?)),
+        "stl" => Ok(TerrainPart::Mesh(crate::io::stl::read_stl(path)?)),
         "tif" | "tiff" | "asc" => {
             let grid = if ext == "asc" {
                 crate::io::ascii_grid::read_grid(path)?
             } else {
                 crate::io::geotiff::read_grid(path)?
             };
-            let mesh = grid_to_mesh(&grid, &stem);
-            if mesh.triangles.is_empty() {
-                return Err(Error::format(
-                    path.display().to_string(),
-                    format!(
-                        "the DEM has {} valid cells of {}: no 3 neighbouring cells hold data",
-                        grid.count_valid(),
-                        grid.values.len()
-                    ),
-                    "check the nodata value and that the grid holds elevations",
-                ));
-            }
-            Ok((mesh, grid.crs.clone()))
+            super::dem_check::check_dem(path, &grid)?;
+            Ok(TerrainPart::Dem(grid))
         }
         _ => Err(Error::format(
             path.display().to_string(),
@@ -44,6 +55,70 @@ pub fn read_terrain_file(path: &Path) -> Result<(MeshData, Crs)> {
             "use .obj, .stl, .tif/.tiff (GeoTIFF DEM) or .asc (ESRI ASCII grid)",
         )),
     }
+}
+
+/// Triangulates the DEM read from `path`, over `joined` (the grid with the cells of neighbouring tiles added, see
+/// [`join_tiles`]) when given; refuses a DEM with no triangle of its own.
+fn dem_mesh(path: &Path, grid: &Grid, joined: Option<&Grid>) -> Result<MeshData> {
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let mesh = grid_to_mesh(grid, &stem);
+    if mesh.triangles.is_empty() {
+        return Err(Error::format(
+            path.display().to_string(),
+            format!(
+                "the DEM has {} valid cells of {}: no 3 neighbouring cells hold data",
+                grid.count_valid(),
+                grid.values.len()
+            ),
+            "check the nodata value and that the grid holds elevations",
+        ));
+    }
+    Ok(match joined {
+        Some(j) => grid_to_mesh(j, &stem),
+        None => mesh,
+    })
+}
+
+/// Relative tolerance on cell sizes and on cell-centre positions for two DEMs to count as one grid (ours: far
+/// below any survey precision, far above the rounding of an origin written with 9 decimals).
+const SAME_GRID_TOLERANCE: f64 = 1e-6;
+
+/// DEM tiles on one grid, joined: a DEM is triangulated between its cell centres, so two tiles that meet edge to
+/// edge leave a strip one cell wide between their outer centres with no surface, where rocks would leave the
+/// terrain. Each tile gets one more column to the east and one more row to the south, holding the cells of the
+/// other tiles there (when they lie on the same grid: equal cell sizes and cell centres that coincide), so the
+/// strips are triangulated once, by the tile west or north of them. `None` when no other tile adds a cell.
+fn join_tiles(grid: &Grid, others: &[&Grid]) -> Option<Grid> {
+    let same = |a: f64, b: f64, cell: f64| (a - b).abs() <= SAME_GRID_TOLERANCE * cell;
+    let neighbours: Vec<&&Grid> = others
+        .iter()
+        .filter(|o| same(o.cell_x_m, grid.cell_x_m, grid.cell_x_m) && same(o.cell_y_m, grid.cell_y_m, grid.cell_y_m))
+        .collect();
+    if neighbours.is_empty() {
+        return None;
+    }
+    let (nc, nr) = (grid.ncols + 1, grid.nrows + 1);
+    let mut joined = Grid::filled(nc, nr, grid.x_min_m, grid.y_max_m, grid.cell_x_m, f32::NAN);
+    joined.cell_y_m = grid.cell_y_m;
+    joined.crs = grid.crs.clone();
+    for r in 0..grid.nrows {
+        joined.values[r * nc..r * nc + grid.ncols].copy_from_slice(&grid.values[r * grid.ncols..(r + 1) * grid.ncols]);
+    }
+    let mut added = false;
+    let edge = (0..nr).map(|r| (grid.ncols, r)).chain((0..grid.ncols).map(|c| (c, grid.nrows)));
+    for (c, r) in edge {
+        let (x, y) = joined.cell_centre(c, r);
+        for o in &neighbours {
+            let Some((oc, or)) = o.cell_of(x, y) else { continue };
+            let (ox, oy) = o.cell_centre(oc, or);
+            if let Some(z) = o.get(oc, or).filter(|_| same(ox, x, grid.cell_x_m) && same(oy, y, grid.cell_y_m)) {
+                joined.values[r * nc + c] = z;
+                added = true;
+                break;
+            }
+        }
+    }
+    added.then_some(joined)
 }
 
 /// Triangulates a DEM: nodes at cell centres, two triangles per square of four valid nodes (one when only three are
@@ -105,10 +180,22 @@ pub fn build_terrain(
     materials: &[Material],
     scenario: &Path,
 ) -> Result<Terrain> {
+    // Every file is read before any DEM is triangulated, so that DEM tiles can be joined.
+    let parts = files.iter().map(|p| read_terrain_part(p)).collect::<Result<Vec<_>>>()?;
+    let dems: Vec<&Grid> = parts.iter().filter_map(TerrainPart::dem).collect();
+    let joined: Vec<Option<Grid>> = (parts.iter())
+        .map(|part| {
+            let grid = part.dem()?;
+            join_tiles(grid, &dems.iter().copied().filter(|o| !std::ptr::eq(*o, grid)).collect::<Vec<_>>())
+        })
+        .collect();
     let mut meshes = Vec::new();
     let mut crs = Crs::default();
-    for p in files {
-        let (mesh, c) = read_terrain_file(p)?;
+    for ((p, part), joined) in files.iter().zip(parts).zip(joined) {
+        let (mesh, c) = match part {
+            TerrainPart::Mesh(mesh) => (mesh, Crs::default()),
+            TerrainPart::Dem(grid) => (dem_mesh(p, &grid, joined.as_ref())?, grid.crs),
+        };
         if crs.is_unknown() {
             crs = c;
         }
@@ -349,6 +436,43 @@ fn centre(vertices: &[Vector3<f64>], tri: &[u32; 3]) -> Vector3<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The `w` × `h` block of `g` whose north-west cell is (c0, r0).
+    fn tile(g: &Grid, c0: usize, r0: usize, w: usize, h: usize) -> Grid {
+        let mut t =
+            Grid::filled(w, h, g.x_min_m + c0 as f64 * g.cell_x_m, g.y_max_m - r0 as f64 * g.cell_y_m, 2.0, 0.0);
+        for r in 0..h {
+            for c in 0..w {
+                t.values[r * w + c] = g.values[(r0 + r) * g.ncols + c0 + c];
+            }
+        }
+        t
+    }
+
+    #[test]
+    fn joined_tiles_triangulate_as_the_whole_grid() {
+        let mut g = Grid::filled(9, 7, 248_000.123, 352_000.456, 2.0, 0.0);
+        for (k, v) in g.values.iter_mut().enumerate() {
+            *v = 1000.0 + (k % 9) as f32 * 1.5 + (k / 9) as f32 * 0.75 + ((k * 7) % 5) as f32 * 0.1;
+        }
+        g.values[30] = f32::NAN;
+        let whole = grid_to_mesh(&g, "dem").triangles.len();
+        let tiles = [tile(&g, 0, 0, 4, 3), tile(&g, 4, 0, 5, 3), tile(&g, 0, 3, 4, 4), tile(&g, 4, 3, 5, 4)];
+        let mut joined = 0;
+        let mut apart = 0;
+        for (i, t) in tiles.iter().enumerate() {
+            let others: Vec<&Grid> = tiles.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, o)| o).collect();
+            let j = join_tiles(t, &others);
+            joined += grid_to_mesh(j.as_ref().unwrap_or(t), "dem").triangles.len();
+            apart += grid_to_mesh(t, "dem").triangles.len();
+        }
+        assert_eq!(joined, whole);
+        assert!(apart < whole, "tiles alone leave the seams open");
+        // A tile on another grid (shifted by a third of a cell) is not joined.
+        let mut shifted = tiles[1].clone();
+        shifted.x_min_m += 2.0 / 3.0;
+        assert!(join_tiles(&tiles[0], &[&shifted]).is_none());
+    }
 
     #[test]
     fn nodes_outside_take_the_height_of_the_nearest_node_inside() {

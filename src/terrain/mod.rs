@@ -6,6 +6,7 @@
 
 pub mod bench;
 pub mod build;
+pub mod dem_check;
 pub mod frame;
 pub mod material;
 pub mod surface;
