@@ -1,7 +1,7 @@
 //! Building a [`Terrain`] from the scenario's files: read, put z up, shift to a local origin, merge, and give each
 //! triangle its material.
 
-use super::{horizontal_to_local, point_in_polygon, Material, Terrain};
+use super::{horizontal_to_local, point_in_polygon, Material, Terrain, UpAxis};
 use crate::error::{Error, Result};
 use crate::io::MeshData;
 use crate::raster::{Crs, Grid};
@@ -370,7 +370,45 @@ pub fn assemble_terrain(
     terrain.up = up;
     terrain.crs = crs;
     terrain.notes = unused_keys(&terrain, spec, &names);
+    terrain.notes.extend(up_axis_note(meshes, up));
     Ok(terrain)
+}
+
+/// A note when the files look as if they had the other up axis: under `up` less than a quarter of their area is
+/// gentler than 45°, under the other axis more than three quarters (ours: a terrain exported y-up and read z-up
+/// stands on its edge; a closed solid, gentle on a third of its area either way, is not flagged).
+fn up_axis_note(meshes: &[(PathBuf, MeshData)], up: UpAxis) -> Option<String> {
+    let gentle_share = |axis: usize| {
+        let (mut gentle, mut all) = (0.0, 0.0);
+        for (_, mesh) in meshes {
+            for t in &mesh.triangles {
+                let [a, b, c] = t.map(|k| Vector3::from(mesh.vertices[k as usize]));
+                let n = (b - a).cross(&(c - a));
+                let area = n.norm();
+                all += area;
+                if n[axis].abs() > std::f64::consts::FRAC_1_SQRT_2 * area {
+                    gentle += area;
+                }
+            }
+        }
+        if all > 0.0 {
+            gentle / all
+        } else {
+            0.0
+        }
+    };
+    let (this, other, other_name) = match up {
+        UpAxis::Z => (gentle_share(2), gentle_share(1), "y"),
+        UpAxis::Y => (gentle_share(1), gentle_share(2), "z"),
+    };
+    (this < 0.25 && other > 0.75).then(|| {
+        format!(
+            "terrain.up: {:.0} % of the terrain's area is gentler than 45° as read, {:.0} % with up = \"{other_name}\": \
+             the files look {other_name}-up; if so, set up = \"{other_name}\" in [terrain]",
+            100.0 * this,
+            100.0 * other
+        )
+    })
 }
 
 /// What `spec` asks that the built terrain does not use: materials no triangle has, and `material_names` entries
@@ -472,6 +510,45 @@ mod tests {
         let mut shifted = tiles[1].clone();
         shifted.x_min_m += 2.0 / 3.0;
         assert!(join_tiles(&tiles[0], &[&shifted]).is_none());
+    }
+
+    /// A mesh of `triangles` over `vertices`, one group.
+    fn mesh(vertices: Vec<[f64; 3]>, triangles: Vec<[u32; 3]>) -> Vec<(PathBuf, MeshData)> {
+        let n = triangles.len();
+        let data = MeshData {
+            vertices,
+            triangles,
+            group: vec![0; n],
+            group_names: vec!["g".into()],
+            material: vec![0; n],
+            material_names: vec![String::new()],
+        };
+        vec![(PathBuf::from("t.obj"), data)]
+    }
+
+    #[test]
+    fn a_terrain_read_with_the_other_up_axis_is_noted_and_a_closed_solid_is_not() {
+        // A 20° slope 10 m square, as a z-up file and as the same surface exported y-up.
+        let z_up = |x: f64, y: f64| [x, y, 20f64.to_radians().tan() * x];
+        let square = |p: &dyn Fn(f64, f64) -> [f64; 3]| {
+            mesh(vec![p(0.0, 0.0), p(10.0, 0.0), p(10.0, 10.0), p(0.0, 10.0)], vec![[0, 1, 2], [0, 2, 3]])
+        };
+        let z_file = square(&z_up);
+        let y_file = square(&|x, y| {
+            let v = z_up(x, y);
+            [v[0], v[2], -v[1]]
+        });
+        assert!(up_axis_note(&z_file, UpAxis::Z).is_none());
+        assert!(up_axis_note(&y_file, UpAxis::Y).is_none());
+        let note = up_axis_note(&y_file, UpAxis::Z).expect("a y-up file read z-up is noted");
+        assert!(note.contains("0 % of the terrain's area") && note.contains("set up = \"y\""), "{note}");
+        assert!(up_axis_note(&z_file, UpAxis::Y).unwrap().contains("set up = \"z\""));
+        // A closed cube: a third of its area is level whichever axis is up.
+        let v = (0..8).map(|k| [(k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64]).collect();
+        let faces = [[0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]];
+        let tris = faces.iter().flat_map(|f| [[f[0], f[1], f[2]], [f[0], f[2], f[3]]]).collect();
+        let cube = mesh(v, tris);
+        assert!(up_axis_note(&cube, UpAxis::Z).is_none() && up_axis_note(&cube, UpAxis::Y).is_none());
     }
 
     #[test]
