@@ -191,6 +191,14 @@ fn geotiff_int16_f64_pixel_is_point_and_errors() {
     let err = geotiff::read_grid(&path).unwrap_err().to_string();
     assert!(err.contains("plain.tif") && err.contains("no georeferencing") && err.contains("how to fix"), "{err}");
 
+    // A colour image (an orthophoto, a scanned map) is not read as heights.
+    let path = p(dir.path(), "rgb.tif");
+    let scale = Some([5.0, 5.0, 0.0]);
+    let tie = Some([0.0, 0.0, 0.0, 1000.0, 2000.0, 0.0]);
+    write_fixture!(&path, colortype::RGB8, 2, 2, &[90u8; 12], scale, tie, Some(lv95_keys(1)), None);
+    let err = geotiff::read_grid(&path).unwrap_err().to_string();
+    assert!(err.contains("rgb.tif") && err.contains("colour image") && err.contains("gdal_translate -b 1"), "{err}");
+
     // Not a TIFF at all.
     let path = p(dir.path(), "junk.tif");
     std::fs::write(&path, b"not a tiff").unwrap();

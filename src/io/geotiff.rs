@@ -1,7 +1,7 @@
 //! GeoTIFF DEMs in, GeoTIFF rasters out, with the `tiff` crate (no GDAL).
 //!
 //! # Reading
-//! The first band of the first image is read and converted to `f32`: sample formats f32, f64, f16 and signed or
+//! The first band of the first image is read and converted to `f32` (a colour image, RGB or RGBA, is refused): sample formats f32, f64, f16 and signed or
 //! unsigned integers of 8 to 64 bits, stripped or tiled, with any compression and predictor the `tiff` crate
 //! decodes (none, LZW, Deflate, PackBits; horizontal and floating-point predictors). The GDAL_NODATA value and any
 //! non-finite value become `NaN`.
@@ -382,10 +382,18 @@ fn geokeys_for(path: &Path, crs: &Crs) -> Result<Option<GeoKeys>> {
     Ok(Some(GeoKeys { directory, double_params: Vec::new(), ascii_params: String::new() }))
 }
 
-/// Accepts colour types whose first sample is a plain number.
+/// Accepts grey and multi-band images (the first band is read); refuses colour images, whose bands are not heights.
 fn check_colortype(path: &Path, colortype: ColorType) -> Result<()> {
     let bits = match colortype {
-        ColorType::Gray(b) | ColorType::GrayA(b) | ColorType::RGB(b) | ColorType::RGBA(b) => b,
+        ColorType::Gray(b) | ColorType::GrayA(b) => b,
+        ColorType::RGB(_) | ColorType::RGBA(_) => {
+            return Err(Error::format(
+                path.display().to_string(),
+                format!("the image is {colortype:?}, a colour image (an orthophoto or a map), not an elevation grid"),
+                "give the DEM itself; if band 1 of this file holds the heights, extract it with \
+                 `gdal_translate -b 1 -ot Float32 in.tif dem.tif`",
+            ))
+        }
         ColorType::Multiband { bit_depth, .. } => bit_depth,
         other => {
             return Err(Error::format(
