@@ -1,10 +1,10 @@
 //! GeoTIFF DEMs in, GeoTIFF rasters out, with the `tiff` crate (no GDAL).
 //!
 //! # Reading
-//! The first band of the first image is read and converted to `f32` (a colour image, RGB or RGBA, is refused): sample formats f32, f64, f16 and signed or
+//! The first band of the first image is read and converted to `f32`: sample formats f32, f64, f16 and signed or
 //! unsigned integers of 8 to 64 bits, stripped or tiled, with any compression and predictor the `tiff` crate
 //! decodes (none, LZW, Deflate, PackBits; horizontal and floating-point predictors). The GDAL_NODATA value and any
-//! non-finite value become `NaN`.
+//! non-finite value become `NaN`. A colour image (RGB or RGBA) is refused: its bands are not heights.
 //!
 //! Georeferencing comes from ModelPixelScale + ModelTiepoint, or from a ModelTransformation without rotation or
 //! shear. With `GTRasterTypeGeoKey = RasterPixelIsPoint` the tie point is a pixel centre, and the grid is shifted
