@@ -77,8 +77,7 @@ fn run_case(case: &str, rocks: usize, threads: usize) {
         let sources = talus::source::Sources::build(&sc.file.sources, &t, Some(rocks), "sources").expect("sources");
         s = talus::ensemble::Setup::new(&sc, t, sources, sc.file.simulation.seed).expect("setup");
     }
-    let frame =
-        RasterFrame::covering(&s.terrain, sc.file.output.cell_size_m, "output.cell_size_m").expect("raster frame");
+    let frame = RasterFrame::covering(&s.terrain, &sc.file.output, "output").expect("raster frame");
     let mut acc = HazardAccumulator::new(frame);
     let n = s.rock_count();
     let t0 = Instant::now();

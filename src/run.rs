@@ -325,7 +325,7 @@ pub fn run_scenario_with(
     let collectors = crate::collector::CollectorSet::new(collector_lines, extras.zone.clone());
     let mut collector_stats = crate::collector::CollectorStats::new(&collectors, setup.terrain.barriers.len());
     let cell = sc.file.output.cell_size_m;
-    let frame = RasterFrame::covering(&setup.terrain, cell, &format!("{}: output.cell_size_m", sc.path.display()))?;
+    let frame = RasterFrame::covering(&setup.terrain, &sc.file.output, &format!("{}: output", sc.path.display()))?;
     let earlier_outputs = earlier_run_outputs(out_dir);
     std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
     let n = setup.rock_count();

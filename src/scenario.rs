@@ -309,11 +309,14 @@ pub struct OutputSpec {
     pub paths: usize,
     /// Also write every raster as an ESRI ASCII grid (`.asc`, with `.prj` when the CRS WKT is known).
     pub ascii_grids: bool,
+    /// Put the raster cell edges on the terrain DEM's cell edges instead of on multiples of the cell size, so
+    /// that with the DEM's cell size the rasters match its cells one for one (default: false).
+    pub align_to_dem: bool,
 }
 
 impl Default for OutputSpec {
     fn default() -> Self {
-        OutputSpec { cell_size_m: 2.0, endpoint_bandwidth_m: None, paths: 0, ascii_grids: false }
+        OutputSpec { cell_size_m: 2.0, endpoint_bandwidth_m: None, paths: 0, ascii_grids: false, align_to_dem: false }
     }
 }
 

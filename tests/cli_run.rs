@@ -291,6 +291,40 @@ fn keys_the_terrain_does_not_use_are_warned_about_and_recorded() {
 }
 
 #[test]
+fn rasters_follow_the_dems_cells_with_align_to_dem() {
+    // The DEM's corner moved off the 4 m multiples (500000.7, 5000000.3; 2 m cells, 40 × 20).
+    let dir = tempfile::tempdir().unwrap();
+    let sc = scenario(dir.path(), "align_to_dem = true", 0.3, "300.0");
+    let dem = dir.path().join("slope.asc");
+    let text = std::fs::read_to_string(&dem).unwrap().replace("xllcorner 500000\n", "xllcorner 500000.7\n");
+    std::fs::write(&dem, text.replace("yllcorner 5000000\n", "yllcorner 5000000.3\n")).unwrap();
+    let corner = |sc: &Path, out: &Path| {
+        let o = talus()
+            .args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap(), "--rocks", "4"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let g = talus::io::geotiff::read_grid(&out.join("reach_probability.tif")).unwrap();
+        (g.x_min_m, g.y_max_m, g.ncols, g.nrows)
+    };
+    // 4 m cells on the DEM's edges: every second DEM cell edge, the DEM's own corner.
+    let (x, y, nc, nr) = corner(&sc, &dir.path().join("aligned"));
+    assert!((x - 500000.7).abs() < 1e-6 && (y - 5000040.3).abs() < 1e-6, "corner {x}, {y}");
+    assert_eq!((nc, nr), (20, 10));
+    // By default the edges are on multiples of the cell size.
+    let text = std::fs::read_to_string(&sc).unwrap().replace("align_to_dem = true", "");
+    std::fs::write(&sc, text).unwrap();
+    let (x, y, _, _) = corner(&sc, &dir.path().join("default"));
+    assert_eq!((x, y), (500000.0, 5000040.0));
+    // A mesh terrain has no cells to follow.
+    let obj = "v 500000 5000000 0\nv 500080 5000000 0\nv 500080 5000040 0\nv 500000 5000040 0\nf 1 2 3\nf 1 3 4\n";
+    let mesh = with_terrain(dir.path(), "flat.obj", obj.as_bytes());
+    let text = std::fs::read_to_string(&mesh).unwrap() + "align_to_dem = true\n";
+    std::fs::write(&mesh, text).unwrap();
+    fails_cleanly(dir.path(), &mesh, &["output.align_to_dem", "no DEM file"]);
+}
+
+#[test]
 fn bad_input_is_answered_with_where_what_and_how() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();

@@ -235,11 +235,12 @@ fn check_frames_before(models: &[(Scenario, String)]) -> Result<()> {
             sc.terrain_files.iter().map(|p| p.canonicalize().unwrap_or_else(|_| p.clone())).collect();
         let mut terrain = sc.file.terrain.clone();
         terrain.files.clear();
-        (files, serde_json::to_string(&terrain).unwrap_or_default(), sc.file.output.cell_size_m.to_bits())
+        let output = &sc.file.output;
+        (files, serde_json::to_string(&terrain).unwrap_or_default(), output.cell_size_m.to_bits(), output.align_to_dem)
     };
     let frame = |sc: &Scenario| -> Result<Grid> {
-        let field = format!("{}: output.cell_size_m", sc.path.display());
-        Ok(RasterFrame::covering(&crate::run::load_terrain(sc)?, sc.file.output.cell_size_m, &field)?.empty_grid())
+        let field = format!("{}: output", sc.path.display());
+        Ok(RasterFrame::covering(&crate::run::load_terrain(sc)?, &sc.file.output, &field)?.empty_grid())
     };
     let (first, first_name) = &models[0];
     let first_key = key(first);

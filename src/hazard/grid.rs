@@ -3,6 +3,7 @@
 
 use crate::error::{number_text, round_up_3_digits, Error, Result};
 use crate::raster::Grid;
+use crate::scenario::OutputSpec;
 use crate::terrain::Terrain;
 
 /// Most cells of a run's raster frame. Ours: 10⁸ cells is a 10 km × 10 km site at 1 m, finer than the terrain
@@ -30,12 +31,12 @@ pub struct RasterFrame {
 
 /// Columns and rows (as f64, so that any cell size can be counted without overflow) of the frame with cell edges
 /// on multiples of `cell_m` covering `extent` = [x_min, y_min, x_max, y_max].
-fn cell_counts(extent: [f64; 4], cell_m: f64) -> [f64; 2] {
-    let count = |lo: f64, hi: f64| {
-        let (lo, hi) = ((lo / cell_m).floor() * cell_m, (hi / cell_m).ceil() * cell_m);
-        ((hi - lo) / cell_m).round().max(1.0)
+fn cell_counts(extent: [f64; 4], cell_m: f64, anchor: [f64; 2]) -> [f64; 2] {
+    let count = |lo: f64, hi: f64, a: f64| {
+        let (lo, hi) = (((lo - a) / cell_m).floor(), ((hi - a) / cell_m).ceil());
+        (hi - lo).round().max(1.0)
     };
-    [count(extent[0], extent[2]), count(extent[1], extent[3])]
+    [count(extent[0], extent[2], anchor[0]), count(extent[1], extent[3], anchor[1])]
 }
 
 /// The smallest cell size (rounded up to 3 significant digits) whose frame over `extent` has at most
@@ -45,7 +46,7 @@ fn smallest_cell_m(extent: [f64; 4]) -> f64 {
     let mut cell_m = round_up_3_digits((area_m2 / MAX_RASTER_CELLS as f64).sqrt().max(1e-9));
     // Snapping the edges to whole cells adds up to a row and a column: grow by 1 % until it fits.
     while {
-        let c = cell_counts(extent, cell_m);
+        let c = cell_counts(extent, cell_m, [0.0, 0.0]);
         c[0] * c[1] > MAX_RASTER_CELLS as f64
     } {
         cell_m = round_up_3_digits(cell_m * 1.01);
@@ -54,20 +55,34 @@ fn smallest_cell_m(extent: [f64; 4]) -> f64 {
 }
 
 impl RasterFrame {
-    /// The frame covering `terrain` with cells of `cell_m`.
+    /// The frame covering `terrain` with the cells `output` asks for: edges on multiples of the cell size, or with
+    /// `align_to_dem` on the cell edges of the terrain's DEM ([`Terrain::grid_anchor_xy`]). `field` locates
+    /// `[output]` in messages.
     ///
     /// # Errors
-    /// More than [`MAX_RASTER_CELLS`] cells: the error names `field` (the cell size key), the terrain's extent,
-    /// the cell count and the smallest cell size allowed.
-    pub fn covering(terrain: &Terrain, cell_m: f64, field: &str) -> Result<RasterFrame> {
+    /// More than [`MAX_RASTER_CELLS`] cells (the error names the cell size key, the terrain's extent, the cell
+    /// count and the smallest cell size allowed), or `align_to_dem` on a terrain with no DEM.
+    pub fn covering(terrain: &Terrain, output: &OutputSpec, field: &str) -> Result<RasterFrame> {
+        let cell_m = output.cell_size_m;
+        let anchor = match (output.align_to_dem, terrain.grid_anchor_xy) {
+            (false, _) => [0.0, 0.0],
+            (true, Some(a)) => a,
+            (true, None) => {
+                return Err(Error::invalid(
+                    format!("{field}.align_to_dem"),
+                    "the terrain has no DEM file whose cells the rasters could follow",
+                    "leave it out for a mesh terrain (OBJ, STL)",
+                ))
+            }
+        };
         let (x0, y0, x1, y1) = terrain.surface.bounds_xy();
         let o = [terrain.origin.x, terrain.origin.y];
         let extent = [x0 + o[0], y0 + o[1], x1 + o[0], y1 + o[1]];
-        let cells = cell_counts(extent, cell_m);
+        let cells = cell_counts(extent, cell_m, anchor);
         if cells[0] * cells[1] > MAX_RASTER_CELLS as f64 {
             let (width, height) = (extent[2] - extent[0], extent[3] - extent[1]);
             return Err(Error::invalid(
-                field,
+                format!("{field}.cell_size_m"),
                 format!(
                     "{} m cells over the terrain's {width:.1} m × {height:.1} m would make {} raster cells, more \
                      than the limit of {MAX_RASTER_CELLS}",
@@ -77,8 +92,8 @@ impl RasterFrame {
                 format!("use cells of at least {} m", number_text(smallest_cell_m(extent))),
             ));
         }
-        let x_min = (extent[0] / cell_m).floor() * cell_m;
-        let y_max = (extent[3] / cell_m).ceil() * cell_m;
+        let x_min = anchor[0] + ((extent[0] - anchor[0]) / cell_m).floor() * cell_m;
+        let y_max = anchor[1] + ((extent[3] - anchor[1]) / cell_m).ceil() * cell_m;
         Ok(RasterFrame {
             ncols: cells[0] as usize,
             nrows: cells[1] as usize,

@@ -183,6 +183,7 @@ pub fn build_terrain(
     // Every file is read before any DEM is triangulated, so that DEM tiles can be joined.
     let parts = files.iter().map(|p| read_terrain_part(p)).collect::<Result<Vec<_>>>()?;
     let dems: Vec<&Grid> = parts.iter().filter_map(TerrainPart::dem).collect();
+    let anchor = dems.first().map(|g| [g.x_min_m, g.y_max_m]);
     let joined: Vec<Option<Grid>> = (parts.iter())
         .map(|part| {
             let grid = part.dem()?;
@@ -201,7 +202,9 @@ pub fn build_terrain(
         }
         meshes.push((p.clone(), mesh));
     }
-    assemble_terrain(&meshes, crs, spec, materials, scenario)
+    let mut terrain = assemble_terrain(&meshes, crs, spec, materials, scenario)?;
+    terrain.grid_anchor_xy = anchor;
+    Ok(terrain)
 }
 
 /// Builds a terrain from meshes already in memory, each with the path it came from (whose stem names its

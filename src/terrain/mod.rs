@@ -71,6 +71,9 @@ pub struct Terrain {
     /// What the scenario asks that the terrain does not use (a material no triangle has, a renamed group the
     /// files do not hold): warnings for the user, not errors.
     pub notes: Vec<String>,
+    /// West and north cell edges of the first DEM among the terrain files, in the files' frame (`None` for meshes):
+    /// where `[output] align_to_dem` puts the raster cells.
+    pub grid_anchor_xy: Option<[f64; 2]>,
 }
 
 impl Terrain {
@@ -128,6 +131,7 @@ impl Terrain {
             stats,
             barriers: Vec::new(),
             notes: Vec::new(),
+            grid_anchor_xy: None,
         })
     }
 
