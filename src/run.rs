@@ -82,7 +82,7 @@ pub struct RunSummary {
     pub collectors: Vec<crate::collector::facts::CollectorFacts>,
     /// The barriers: rocks caught and rocks that broke through.
     pub barriers: Vec<crate::collector::facts::BarrierFacts>,
-    /// Keys of the scenario the terrain does not use ([`Terrain::notes`]).
+    /// What building the terrain noticed ([`Terrain::notes`]): keys it does not use, area closed over.
     pub warnings: Vec<String>,
 }
 

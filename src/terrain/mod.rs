@@ -69,7 +69,8 @@ pub struct Terrain {
     /// Barriers standing on the terrain (none by default).
     pub barriers: Vec<crate::sim::Barrier>,
     /// What the scenario asks that the terrain does not use (a material no triangle has, a renamed group the
-    /// files do not hold): warnings for the user, not errors.
+    /// files do not hold) and a terrain largely closed over (the other up axis?): warnings for the user, not
+    /// errors.
     pub notes: Vec<String>,
     /// West and north cell edges of the first DEM among the terrain files, in the files' frame (`None` for meshes):
     /// where `[output] align_to_dem` puts the raster cells.
