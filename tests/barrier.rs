@@ -525,6 +525,19 @@ fn barrier_models_on_a_relative_site_with_a_campaign_source() {
 }
 
 #[test]
+fn a_barrier_study_reports_the_terrains_warnings_as_a_stage() {
+    let dir = tempfile::tempdir().unwrap();
+    let extra = "[materials.rockfill]\npreset = \"floor_all\"\n[barrier_design]\nmin_rocks = 10\n";
+    let path = small_bench_scenario(dir.path(), extra);
+    let said = std::cell::RefCell::new(Vec::new());
+    let o = RunOverrides { rocks: Some(20), ..Default::default() };
+    propose(&scenario(&path), &o, &dir.path().join("study"), &|s| said.borrow_mut().push(s.to_string()), &|_, _| {})
+        .unwrap();
+    let said = said.into_inner();
+    assert!(said.first().is_some_and(|s| s.starts_with("warning: [materials.rockfill] is defined")), "{said:?}");
+}
+
+#[test]
 fn an_asset_line_or_polygon_off_the_terrain_is_refused_before_any_run() {
     // The bench stack spans about 0-160 m by 0-100 m: a line given in another frame lies far off it.
     let dir = tempfile::tempdir().unwrap();

@@ -284,6 +284,15 @@ fn keys_the_terrain_does_not_use_are_warned_about_and_recorded() {
     assert_eq!(summary["warnings"].as_array().unwrap().len(), 3, "{}", summary["warnings"]);
     let index = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(index.contains("Warning: [materials.rockfill] is defined"), "index.html lacks the warning");
+    // `talus envelope` prints each model's warnings.
+    let other = dir.path().join("other");
+    std::fs::create_dir_all(&other).unwrap();
+    let clean_other = scenario(&other, "", 0.5, "300.0");
+    let o = envelope(&[&sc, &clean_other], &dir.path().join("env"), &["--rocks", "4"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(err.matches("warning: model").count(), 3, "{err}");
+    assert!(err.contains("[materials.rockfill] is defined"), "{err}");
     // The shipped scenario from the same DEM and nothing unused: no warning.
     let clean = scenario(dir.path(), "", 0.3, "300.0");
     let o = talus().args(["run", clean.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();

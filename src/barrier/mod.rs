@@ -172,6 +172,9 @@ pub fn propose_models(
     let sc = &models[0].1;
     let spec = &sc.file.barrier_design;
     let terrain = load_terrain(sc)?;
+    for note in &terrain.notes {
+        stage(&format!("warning: {note}"));
+    }
     let zone = protected_zone(spec, &terrain);
     if let Some(z) = &zone {
         check_zone_on_terrain(z, &terrain, &format!("{}: barrier_design", sc.path.display()))?;

@@ -95,6 +95,9 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
             "  {}: run-out median {:.1} m (P95 {:.1} m); largest energy P95 {:.1} kJ; largest bounce P50 {:.2} m, P95 {:.2} m",
             m.name, m.runout_m.p50, m.runout_m.p95, m.max_kinetic_kj.p95, m.max_bounce_m.p50, m.max_bounce_m.p95
         );
+        for w in &m.warnings {
+            eprintln!("warning: model {}: {w}", m.name);
+        }
     }
     say!(
         "(max - min) / median over the models, in the median cell and at P95, over the cells at least {} rocks of \

@@ -49,6 +49,8 @@ pub struct EnvelopeModel {
     pub wall_time_s: f64,
     /// Its collector lines (the scenario's `[[collectors]]`).
     pub collectors: Vec<CollectorFacts>,
+    /// Its run's warnings (`summary.json` `warnings`).
+    pub warnings: Vec<String>,
 }
 
 /// A figure's lowest, median and highest value over the runs that have it.
@@ -391,6 +393,7 @@ fn envelope_of(
             max_bounce_m: s.max_bounce_m.clone(),
             wall_time_s: s.wall_time_s,
             collectors: s.collectors.clone(),
+            warnings: s.warnings.clone(),
         });
         // The frames agree: checked before the runs (`check_frames_before`), and again by `combine`.
         if first.is_none() {
