@@ -108,18 +108,11 @@ fn check_zone_on_terrain(zone: &ProtectedZone, terrain: &Terrain, field: &str) -
         ProtectedZone::Line(p) => ("asset_line", p, false),
         ProtectedZone::Polygon(p) => ("asset_polygon", p, true),
     };
-    let over = |p: [f64; 2]| terrain.surface.height(p[0], p[1]).is_some();
-    let mut edges: Vec<([f64; 2], [f64; 2])> = pts.windows(2).map(|w| (w[0], w[1])).collect();
+    let mut ring = pts.clone();
     if closed {
-        edges.push((pts[pts.len() - 1], pts[0]));
+        ring.push(pts[0]);
     }
-    let on_edge = edges.iter().any(|&(a, b)| {
-        let n = ((b[0] - a[0]).hypot(b[1] - a[1]).ceil() as usize).clamp(1, 10_000);
-        (0..=n).any(|k| {
-            let t = k as f64 / n as f64;
-            over([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])])
-        })
-    });
+    let on_edge = terrain.surface.any_point_over(&ring);
     let encloses = closed && terrain.surface.vertices().iter().any(|v| point_in_polygon(v.x, v.y, pts));
     if on_edge || encloses {
         return Ok(());

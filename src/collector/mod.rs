@@ -267,12 +267,7 @@ pub fn scenario_collectors(specs: &[CollectorSpec], terrain: &Terrain) -> Result
                     "give every collector its own name (collectors.csv has one row per name)",
                 ));
             }
-            // Sample the line every metre or so (at most 10,000 points) for ground under it.
-            let n = (c.length_m().ceil() as usize).clamp(1, 10_000);
-            if !(0..=n).any(|k| {
-                let p = c.point_at(c.length_m() * k as f64 / n as f64);
-                terrain.surface.height(p[0], p[1]).is_some()
-            }) {
+            if !terrain.surface.any_point_over(&c.line_m) {
                 return Err(Error::invalid(
                     field,
                     "no point of the line lies over the terrain",

@@ -1,5 +1,5 @@
 //! The raster frame of a run's hazard maps: a north-up grid over the terrain's horizontal extent, in the terrain's
-//! own coordinates, with cell edges on multiples of the cell size.
+//! own coordinates, with cell edges on multiples of the cell size (or on the DEM's cell edges, `align_to_dem`).
 
 use crate::error::{number_text, round_up_3_digits, Error, Result};
 use crate::raster::Grid;
@@ -30,7 +30,7 @@ pub struct RasterFrame {
 }
 
 /// Columns and rows (as f64, so that any cell size can be counted without overflow) of the frame with cell edges
-/// on multiples of `cell_m` covering `extent` = [x_min, y_min, x_max, y_max].
+/// at `anchor` plus multiples of `cell_m` covering `extent` = [x_min, y_min, x_max, y_max].
 fn cell_counts(extent: [f64; 4], cell_m: f64, anchor: [f64; 2]) -> [f64; 2] {
     let count = |lo: f64, hi: f64, a: f64| {
         let (lo, hi) = (((lo - a) / cell_m).floor(), ((hi - a) / cell_m).ceil());

@@ -267,6 +267,23 @@ impl Surface {
         self.zmax[0].2[fj as usize * self.nx + fi as usize]
     }
 
+    /// True if some point of the polyline `line` (local frame; each segment sampled about every metre, at most
+    /// 10,000 points a segment) lies over the surface: a line given in another frame has none.
+    pub fn any_point_over(&self, line: &[[f64; 2]]) -> bool {
+        let over = |p: [f64; 2]| self.at(p[0], p[1]).is_some();
+        if let [p] = line {
+            return over(*p);
+        }
+        line.windows(2).any(|w| {
+            let (a, b) = (w[0], w[1]);
+            let n = ((b[0] - a[0]).hypot(b[1] - a[1]).ceil() as usize).clamp(1, 10_000);
+            (0..=n).any(|k| {
+                let t = k as f64 / n as f64;
+                over([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])])
+            })
+        })
+    }
+
     /// Height of the surface under (x, y), `None` over holes.
     #[inline]
     pub fn height(&self, x: f64, y: f64) -> Option<f64> {
