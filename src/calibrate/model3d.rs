@@ -64,7 +64,8 @@ impl Model3d {
         source: &str,
     ) -> Result<Model3d> {
         let map = &cfg.terrain;
-        let (mesh, _) = crate::terrain::build::read_terrain_file(terrain_file)?;
+        // The file is read once: its names give the materials, its mesh the terrain, its grid (a DEM's) the map frame.
+        let (mesh, dem) = crate::terrain::build::read_terrain_file(terrain_file)?;
         let stem = terrain_file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         let rename = |n: &str| map.material_names.get(n).cloned().unwrap_or_else(|| n.to_string());
         let mut names: Vec<String> = match map.materials_by {
@@ -101,18 +102,15 @@ impl Model3d {
             clip: map.clip.clone(),
             level_beyond: map.level_beyond.clone(),
         };
-        let terrain = crate::terrain::build::build_terrain(
-            &[terrain_file.to_path_buf()],
+        let crs = dem.as_ref().map(|g| g.crs.clone()).unwrap_or_default();
+        let mut terrain = crate::terrain::build::assemble_terrain(
+            &[(terrain_file.to_path_buf(), mesh)],
+            crs,
             &spec,
             &placeholder,
             Path::new(source),
         )?;
-        let ext = terrain_file.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-        let dem = match ext.as_str() {
-            "asc" => Some(crate::io::ascii_grid::read_grid(terrain_file)?),
-            "tif" | "tiff" => Some(crate::io::geotiff::read_grid(terrain_file)?),
-            _ => None,
-        };
+        terrain.grid_anchor_xy = dem.as_ref().map(|g| [g.x_min_m, g.y_max_m]);
         let mut bodies = BTreeMap::new();
         for (id, block) in &campaign.blocks {
             bodies.insert(id.clone(), campaign.body(block)?);

@@ -11,11 +11,11 @@ use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 
 /// Reads one terrain file by its extension: `.obj`, `.stl`, `.tif`/`.tiff` (GeoTIFF DEM) or `.asc` (ESRI ASCII
-/// DEM). DEMs are triangulated; their CRS is returned too.
-pub fn read_terrain_file(path: &Path) -> Result<(MeshData, Crs)> {
+/// DEM). DEMs are triangulated; their grid is returned too.
+pub fn read_terrain_file(path: &Path) -> Result<(MeshData, Option<Grid>)> {
     match read_terrain_part(path)? {
-        TerrainPart::Mesh(mesh) => Ok((mesh, Crs::default())),
-        TerrainPart::Dem(grid) => Ok((dem_mesh(path, &grid, None)?, grid.crs)),
+        TerrainPart::Mesh(mesh) => Ok((mesh, None)),
+        TerrainPart::Dem(grid) => Ok((dem_mesh(path, &grid, None)?, Some(grid))),
     }
 }
 
