@@ -7,7 +7,10 @@ use talus::calibrate::fit::{with_unit, SearchRecord};
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::params::Region;
-use talus::calibrate::synthetic::{case_2d, synthetic_2d, synthetic_3d, truth_2d, Synthetic2d, Synthetic3d, TRUE_2D};
+use talus::calibrate::synthetic::{
+    case_2d, case_3d, standard_zone, synthetic_2d, synthetic_3d, truth_2d, zone_overlap, Synthetic2d, Synthetic3d,
+    TRUE_2D,
+};
 use talus::calibrate::{base_candidate, calibrate, split, Model};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
@@ -621,6 +624,48 @@ fn profile_loop_adds_nothing_without_a_hidden_effect() {
         assert!(r.effects_added.is_empty(), "{design} seed {seed}: {:#?}", r.effects_tried);
         assert!(r.final_stage.holdout.runout_mae_m.is_finite());
     }
+}
+
+/// Settings for the 3DRB effects-loop tests: the study's `zone` and `control_c` cases at half their runs (36),
+/// with fewer repeats, evaluations and permutations than the defaults (the full study: `cargo run --release
+/// --example calibration_study -- zone control_c*`, docs/calibration.md). About 70 and 50 s in release on 2 cores.
+fn rigid_body_loop(name: &str) -> talus::calibrate::report::Report {
+    let spec = Synthetic3d { runs_per_group: 3, ..case_3d(name, 1).unwrap() };
+    let model = synthetic_3d(&spec, SimParams::default()).unwrap();
+    let mut cfg = CalibrationConfig {
+        repeats: 6,
+        search_repeats: 4,
+        max_evaluations: Some(12),
+        inner_folds: 3,
+        ..Default::default()
+    };
+    cfg.effects.max_rounds = 1;
+    cfg.effects.max_proposals = 2;
+    cfg.effects.refit_evaluations = Some(6);
+    cfg.effects.cv_refit_evaluations = Some(6);
+    cfg.effects.screen_repeats = Some(4);
+    cfg.effects.permutations = 199;
+    cfg.back_analysis.enabled = false;
+    let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+    calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report
+}
+
+#[test]
+fn rigid_body_loop_finds_a_hidden_soft_zone() {
+    // A drag of 20 /s on 40 m of the plain below the two southern release points stops their rocks; undeclared.
+    let r = rigid_body_loop("zone");
+    let Some(Region::Polygon(p)) = named_with_cut(&r, "zone").region.clone() else { panic!("no polygon") };
+    let (share, centroid_inside) = zone_overlap(&p, &standard_zone());
+    assert!(share > 0.5 && centroid_inside, "zone {p:?} lies {:.0} % in the hidden one", 100.0 * share);
+}
+
+#[test]
+fn rigid_body_loop_adds_nothing_without_a_hidden_effect() {
+    // The same plain without the soft ground: the zone check still proposes a zone here, and the cross-validation
+    // must turn it down.
+    let r = rigid_body_loop("control_c");
+    assert!(r.effects_added.is_empty(), "{:#?}", r.effects_tried);
+    assert!(!r.effects_tried.is_empty(), "nothing was tried: the test no longer exercises the keep rule");
 }
 
 /// Writes a synthetic profile campaign (no `y_m` column) and its `profile.csv` into `dir`.
