@@ -199,6 +199,17 @@ fn geotiff_int16_f64_pixel_is_point_and_errors() {
     let err = geotiff::read_grid(&path).unwrap_err().to_string();
     assert!(err.contains("rgb.tif") && err.contains("colour image") && err.contains("gdal_translate -b 1"), "{err}");
 
+    // An 8-bit grey image (a hillshade) is a picture: refused as a DEM, though it reads as a grid; 16-bit heights
+    // are read.
+    let path = p(dir.path(), "hillshade.tif");
+    write_fixture!(&path, colortype::Gray8, 2, 2, &[0u8, 90, 180, 255], scale, tie, Some(lv95_keys(1)), None);
+    assert!(geotiff::read_grid(&path).is_ok());
+    let err = geotiff::read_dem(&path).unwrap_err().to_string();
+    assert!(err.contains("hillshade.tif") && err.contains("8-bit") && err.contains("-ot Float32"), "{err}");
+    let path = p(dir.path(), "dem16.tif");
+    write_fixture!(&path, colortype::Gray16, 2, 2, &[410u16, 412, 415, 420], scale, tie, Some(lv95_keys(1)), None);
+    assert_eq!(geotiff::read_dem(&path).unwrap().get(1, 1), Some(420.0));
+
     // Not a TIFF at all.
     let path = p(dir.path(), "junk.tif");
     std::fs::write(&path, b"not a tiff").unwrap();

@@ -382,6 +382,25 @@ fn geokeys_for(path: &Path, crs: &Crs) -> Result<Option<GeoKeys>> {
     Ok(Some(GeoKeys { directory, double_params: Vec::new(), ascii_params: String::new() }))
 }
 
+/// Reads a GeoTIFF given as a DEM: [`read_grid`], refusing 8-bit samples. Values of 0–255 (or −128–127) in steps
+/// of 1 are a picture (a hillshade, a scanned map, a classification), not heights: read as metres they make a
+/// terrain a few hundred metres high in 1 m terraces, and the run ends with numbers nobody can use.
+pub fn read_dem(path: &Path) -> Result<Grid> {
+    let file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut dec = Decoder::new(BufReader::new(file)).map_err(|e| tiff_error(path, e))?.with_limits(limits());
+    let colortype = dec.colortype().map_err(|e| tiff_error(path, e))?;
+    if let ColorType::Gray(8) | ColorType::GrayA(8) | ColorType::Multiband { bit_depth: 8, .. } = colortype {
+        return Err(Error::format(
+            path.display().to_string(),
+            "the image holds 8-bit values (0 to 255 in steps of 1): a picture such as a hillshade, a scanned map or \
+             a classification, not an elevation grid",
+            "give the DEM itself; if these really are heights in metres, convert them with \
+             `gdal_translate -ot Float32 in.tif dem.tif`",
+        ));
+    }
+    read_grid(path)
+}
+
 /// Accepts grey and multi-band images (the first band is read); refuses colour images, whose bands are not heights.
 fn check_colortype(path: &Path, colortype: ColorType) -> Result<()> {
     let bits = match colortype {

@@ -44,7 +44,7 @@ fn read_terrain_part(path: &Path) -> Result<TerrainPart> {
             let grid = if ext == "asc" {
                 crate::io::ascii_grid::read_grid(path)?
             } else {
-                crate::io::geotiff::read_grid(path)?
+                crate::io::geotiff::read_dem(path)?
             };
             super::dem_check::check_dem(path, &grid)?;
             Ok(TerrainPart::Dem(grid))
