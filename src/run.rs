@@ -72,7 +72,7 @@ pub struct RunSummary {
     pub contact_steps: u64,
     /// Contact-solver sweeps over all rocks.
     pub solver_sweeps: u64,
-    /// Wall-clock time, s.
+    /// Wall-clock time from the terrain built to the outputs written, s.
     pub wall_time_s: f64,
     /// Rocks per second of wall-clock time.
     pub rocks_per_second: f64,
@@ -317,8 +317,21 @@ pub fn run_scenario_with(
     extras: &RunExtras,
     on_rock: &mut dyn FnMut(&RockRecord, &crate::collector::RockCrossings),
 ) -> Result<RunOutput> {
+    run_setup(sc, setup(sc, overrides)?, overrides, out_dir, progress, extras, on_rock)
+}
+
+/// [`run_scenario_with`] on a setup already built by [`setup`] (so that a caller can show the terrain's notes
+/// before the rocks run).
+pub fn run_setup(
+    sc: &Scenario,
+    setup: Setup,
+    overrides: &RunOverrides,
+    out_dir: &Path,
+    progress: &dyn Fn(usize, usize),
+    extras: &RunExtras,
+    on_rock: &mut dyn FnMut(&RockRecord, &crate::collector::RockCrossings),
+) -> Result<RunOutput> {
     let t0 = Instant::now();
-    let setup = setup(sc, overrides)?;
     let mut collector_lines = crate::collector::scenario_collectors(&sc.file.collectors, &setup.terrain)?;
     let n_user_collectors = collector_lines.len();
     collector_lines.extend(extras.collectors.iter().cloned());

@@ -4,7 +4,7 @@ use super::progress;
 use anyhow::Context;
 use clap::Args;
 use std::path::PathBuf;
-use talus::run::run_scenario;
+use talus::run::{run_setup, RunExtras};
 
 /// Run a 3D rigid-body rockfall scenario and write end points, hazard rasters (GeoTIFF, PNG maps), hazard zones,
 /// collector tables, a run manifest and index.html.
@@ -53,8 +53,15 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         }
         pb.set_position(done as u64);
     };
-    let summary = run_scenario(&sc, &overrides, &a.out, &progress)
-        .with_context(|| format!("running {}", a.scenario.display()))?;
+    let context = || format!("running {}", a.scenario.display());
+    // The terrain's notes (a material no triangle has, a terrain closed over) come before the rocks run.
+    let setup = talus::run::setup(&sc, &overrides).with_context(context)?;
+    for w in &setup.terrain.notes {
+        pb.suspend(|| eprintln!("warning: {w}"));
+    }
+    let summary = run_setup(&sc, setup, &overrides, &a.out, &progress, &RunExtras::default(), &mut |_, _| {})
+        .with_context(context)?
+        .summary;
     pb.finish_and_clear();
     let reason = |r: &str| summary.stop_reasons.get(r).copied().unwrap_or(0);
     say!(
@@ -86,9 +93,6 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
             c.kinetic_kj_p95.map_or("-".into(), |v| format!("{v:.1}")),
             c.passing_height_m_p95.map_or("-".into(), |v| format!("{v:.2}"))
         );
-    }
-    for w in &summary.warnings {
-        eprintln!("warning: {w}");
     }
     say!(
         "wrote {} files to {}; open {} to see them",
