@@ -302,6 +302,37 @@ fn adjacent_dem_tiles_form_one_surface_without_a_seam() {
         .collect();
     assert!(at_seam.is_empty(), "rocks left the terrain at the seam between the tiles: {at_seam:?}");
     assert_eq!(endpoints.lines().count(), 13);
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("not on one grid"));
+}
+
+#[test]
+fn dem_tiles_that_meet_off_one_grid_are_warned_about() {
+    // The east tile on 3 m cells starting 1 m east of the west tile's edge: they cannot be joined, and the run
+    // says so (with the GDAL command that puts them on one grid) instead of losing rocks at the seam unexplained.
+    let dir = tempfile::tempdir().unwrap();
+    let g = slope_grid();
+    let mut west = Grid::filled(15, g.nrows, g.x_min_m, g.y_max_m, 2.0, 0.0);
+    for r in 0..g.nrows {
+        west.values[r * 15..(r + 1) * 15].copy_from_slice(&g.values[r * g.ncols..r * g.ncols + 15]);
+    }
+    let mut east = Grid::filled(10, 14, g.x_min_m + 31.0, g.y_max_m, 3.0, 0.0);
+    for r in 0..14 {
+        for c in 0..10 {
+            let x = 31.0 + (c as f64 + 0.5) * 3.0;
+            east.values[r * 10 + c] = (1500.0 + (x - 20.0) * 35f64.to_radians().tan()) as f32;
+        }
+    }
+    std::fs::write(dir.path().join("west.asc"), ascii_text(&west, "2", "NODATA_value -9999")).unwrap();
+    std::fs::write(dir.path().join("east.asc"), ascii_text(&east, "3", "NODATA_value -9999")).unwrap();
+    let sc = scenario(dir.path(), "west.asc\", \"east.asc", [248_055.0, 352_020.0]);
+    let out = dir.path().join("out");
+    let o = run(&sc, &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let needle = "warning: DEM tiles west.asc (2 × 2 m cells) and east.asc (3 × 3 m cells) meet but are not on one grid";
+    assert!(err.contains(needle) && err.contains("gdalwarp -tr 2 2 -tap west.asc east.asc joined.tif"), "{err}");
+    let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    assert!(summary.contains("are not on one grid"), "{summary}");
 }
 
 #[test]

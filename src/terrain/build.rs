@@ -90,10 +90,7 @@ const SAME_GRID_TOLERANCE: f64 = 1e-6;
 /// strips are triangulated once, by the tile west or north of them. `None` when no other tile adds a cell.
 fn join_tiles(grid: &Grid, others: &[&Grid]) -> Option<Grid> {
     let same = |a: f64, b: f64, cell: f64| (a - b).abs() <= SAME_GRID_TOLERANCE * cell;
-    let neighbours: Vec<&&Grid> = others
-        .iter()
-        .filter(|o| same(o.cell_x_m, grid.cell_x_m, grid.cell_x_m) && same(o.cell_y_m, grid.cell_y_m, grid.cell_y_m))
-        .collect();
+    let neighbours: Vec<&&Grid> = others.iter().filter(|o| on_one_grid(grid, o)).collect();
     if neighbours.is_empty() {
         return None;
     }
@@ -119,6 +116,53 @@ fn join_tiles(grid: &Grid, others: &[&Grid]) -> Option<Grid> {
         }
     }
     added.then_some(joined)
+}
+
+/// Two DEMs on one grid: equal cell sizes, and cell edges that line up (within [`SAME_GRID_TOLERANCE`] of a cell).
+fn on_one_grid(a: &Grid, b: &Grid) -> bool {
+    let whole = |d: f64, cell: f64| ((d / cell) - (d / cell).round()).abs() <= SAME_GRID_TOLERANCE;
+    (a.cell_x_m - b.cell_x_m).abs() <= SAME_GRID_TOLERANCE * a.cell_x_m
+        && (a.cell_y_m - b.cell_y_m).abs() <= SAME_GRID_TOLERANCE * a.cell_y_m
+        && whole(a.x_min_m - b.x_min_m, a.cell_x_m)
+        && whole(a.y_max_m - b.y_max_m, a.cell_y_m)
+}
+
+/// Notes on DEM tiles that meet (their extents come within a cell of each other) without lying on one grid: they
+/// cannot be joined, and the strip between their outer cell centres has no surface.
+fn seam_notes(files: &[PathBuf], parts: &[TerrainPart]) -> Vec<String> {
+    let dems: Vec<(&PathBuf, &Grid)> = files.iter().zip(parts).filter_map(|(p, part)| Some((p, part.dem()?))).collect();
+    let extent = |g: &Grid| {
+        [g.x_min_m, g.y_max_m - g.nrows as f64 * g.cell_y_m, g.x_min_m + g.ncols as f64 * g.cell_x_m, g.y_max_m]
+    };
+    let mut notes = Vec::new();
+    for (i, (pa, a)) in dems.iter().enumerate() {
+        for (pb, b) in &dems[i + 1..] {
+            let (ea, eb) = (extent(a), extent(b));
+            let reach = a.cell_x_m.max(a.cell_y_m).max(b.cell_x_m).max(b.cell_y_m);
+            let meet =
+                ea[0] <= eb[2] + reach && eb[0] <= ea[2] + reach && ea[1] <= eb[3] + reach && eb[1] <= ea[3] + reach;
+            if meet && !on_one_grid(a, b) {
+                let name = |p: &PathBuf| p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+                notes.push(format!(
+                    "DEM tiles {} ({} × {} m cells) and {} ({} × {} m cells) meet but are not on one grid (cell sizes \
+                     or cell edges differ), so they are not joined: the strip between their outer cell centres has no \
+                     surface and rocks that reach it leave the terrain; resample them onto one grid, e.g. \
+                     `gdalwarp -tr {} {} -tap {} {} joined.tif`, and give joined.tif",
+                    name(pa),
+                    a.cell_x_m,
+                    a.cell_y_m,
+                    name(pb),
+                    b.cell_x_m,
+                    b.cell_y_m,
+                    a.cell_x_m,
+                    a.cell_y_m,
+                    name(pa),
+                    name(pb)
+                ));
+            }
+        }
+    }
+    notes
 }
 
 /// Triangulates a DEM: nodes at cell centres, two triangles per square of four valid nodes (one when only three are
@@ -190,6 +234,7 @@ pub fn build_terrain(
             join_tiles(grid, &dems.iter().copied().filter(|o| !std::ptr::eq(*o, grid)).collect::<Vec<_>>())
         })
         .collect();
+    let seams = seam_notes(files, &parts);
     let mut meshes = Vec::new();
     let mut crs = Crs::default();
     for ((p, part), joined) in files.iter().zip(parts).zip(joined) {
@@ -204,6 +249,7 @@ pub fn build_terrain(
     }
     let mut terrain = assemble_terrain(&meshes, crs, spec, materials, scenario)?;
     terrain.grid_anchor_xy = anchor;
+    terrain.notes.extend(seams);
     Ok(terrain)
 }
 
@@ -513,6 +559,15 @@ mod tests {
         let mut shifted = tiles[1].clone();
         shifted.x_min_m += 2.0 / 3.0;
         assert!(join_tiles(&tiles[0], &[&shifted]).is_none());
+        // Which the terrain notes, naming both files; tiles on one grid, and a tile far away, are not noted.
+        let files: Vec<PathBuf> = ["a.tif", "b.tif", "c.tif", "d.tif"].iter().map(PathBuf::from).collect();
+        let mut far = shifted.clone();
+        far.x_min_m += 1000.0;
+        let parts = |grids: [&Grid; 3]| grids.map(|g| TerrainPart::Dem(g.clone()));
+        assert!(seam_notes(&files, &parts([&tiles[0], &tiles[1], &far])).is_empty());
+        let notes = seam_notes(&files, &parts([&tiles[0], &far, &shifted]));
+        assert_eq!(notes.len(), 1, "{notes:?}");
+        assert!(notes[0].starts_with("DEM tiles a.tif (2 × 2 m cells) and c.tif (2 × 2 m cells) meet"), "{notes:?}");
     }
 
     #[test]
