@@ -329,7 +329,8 @@ fn dem_tiles_that_meet_off_one_grid_are_warned_about() {
     let o = run(&sc, &out);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
-    let needle = "warning: DEM tiles west.asc (2 × 2 m cells) and east.asc (3 × 3 m cells) meet but are not on one grid";
+    let needle =
+        "warning: DEM tiles west.asc (2 × 2 m cells) and east.asc (3 × 3 m cells) meet but are not on one grid";
     assert!(err.contains(needle) && err.contains("gdalwarp -tr 2 2 -tap west.asc east.asc joined.tif"), "{err}");
     let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
     assert!(summary.contains("are not on one grid"), "{summary}");

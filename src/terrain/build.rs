@@ -61,8 +61,13 @@ fn read_terrain_part(path: &Path) -> Result<TerrainPart> {
 /// [`join_tiles`]) when given; refuses a DEM with no triangle of its own.
 fn dem_mesh(path: &Path, grid: &Grid, joined: Option<&Grid>) -> Result<MeshData> {
     let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let mesh = grid_to_mesh(grid, &stem);
-    if mesh.triangles.is_empty() {
+    // A triangle needs 3 valid nodes of a square of 4 (see grid_to_mesh).
+    let valid = |c: usize, r: usize| usize::from(grid.get(c, r).is_some());
+    let has_triangle = (0..grid.nrows.saturating_sub(1)).any(|r| {
+        (0..grid.ncols.saturating_sub(1))
+            .any(|c| valid(c, r) + valid(c + 1, r) + valid(c, r + 1) + valid(c + 1, r + 1) >= 3)
+    });
+    if !has_triangle {
         return Err(Error::format(
             path.display().to_string(),
             format!(
@@ -73,10 +78,7 @@ fn dem_mesh(path: &Path, grid: &Grid, joined: Option<&Grid>) -> Result<MeshData>
             "check the nodata value and that the grid holds elevations",
         ));
     }
-    Ok(match joined {
-        Some(j) => grid_to_mesh(j, &stem),
-        None => mesh,
-    })
+    Ok(grid_to_mesh(joined.unwrap_or(grid), &stem))
 }
 
 /// Relative tolerance on cell sizes and on cell-centre positions for two DEMs to count as one grid (ours: far
@@ -568,6 +570,21 @@ mod tests {
         let notes = seam_notes(&files, &parts([&tiles[0], &far, &shifted]));
         assert_eq!(notes.len(), 1, "{notes:?}");
         assert!(notes[0].starts_with("DEM tiles a.tif (2 × 2 m cells) and c.tif (2 × 2 m cells) meet"), "{notes:?}");
+    }
+
+    #[test]
+    fn a_dem_with_no_three_neighbouring_cells_is_refused() {
+        // A checkerboard of data and nodata: every square of four cells has two valid nodes, no triangle.
+        let mut g = Grid::filled(4, 4, 0.0, 8.0, 2.0, 100.0);
+        for (k, v) in g.values.iter_mut().enumerate() {
+            if (k % 4 + k / 4) % 2 == 1 {
+                *v = f32::NAN;
+            }
+        }
+        let e = dem_mesh(Path::new("holes.asc"), &g, None).unwrap_err().to_string();
+        assert!(e.contains("holes.asc") && e.contains("8 valid cells of 16"), "{e}");
+        g.values[1] = 100.0;
+        assert_eq!(dem_mesh(Path::new("holes.asc"), &g, None).unwrap().triangles.len(), 2);
     }
 
     #[test]
