@@ -104,6 +104,19 @@ pub enum MaterialsBy {
     Slope,
 }
 
+impl MaterialsBy {
+    /// The name as written in a scenario (`materials_by = "group"`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            MaterialsBy::Single => "single",
+            MaterialsBy::Group => "group",
+            MaterialsBy::Material => "material",
+            MaterialsBy::File => "file",
+            MaterialsBy::Slope => "slope",
+        }
+    }
+}
+
 /// `[terrain]`.
 #[derive(Debug, Clone, Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields)]
@@ -849,5 +862,18 @@ impl RockSpec {
             }
         }
         Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::MaterialsBy;
+
+    #[test]
+    fn materials_by_names_itself_as_a_scenario_writes_it() {
+        for m in [MaterialsBy::Single, MaterialsBy::Group, MaterialsBy::Material, MaterialsBy::File, MaterialsBy::Slope]
+        {
+            assert_eq!(serde_json::to_string(&m).unwrap(), format!("\"{}\"", m.as_str()));
+        }
     }
 }

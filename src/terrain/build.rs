@@ -377,7 +377,7 @@ pub fn assemble_terrain(
         tri_mat.push(m as u16);
     }
     if !unknown.is_empty() {
-        let by = format!("{:?}", spec.materials_by).to_lowercase();
+        let by = spec.materials_by.as_str();
         return Err(Error::invalid(
             format!("{}: terrain.materials_by", scenario.display()),
             format!(
@@ -465,7 +465,7 @@ fn up_axis_note(terrain: &Terrain, up: UpAxis) -> Option<String> {
 /// What `spec` asks that the built terrain does not use: materials no triangle has, and `material_names` entries
 /// no group, material or file of the terrain files (`names`, one per triangle) carries.
 fn unused_keys(terrain: &Terrain, spec: &TerrainSpec, names: &[String]) -> Vec<String> {
-    let by = format!("{:?}", spec.materials_by).to_lowercase();
+    let by = spec.materials_by.as_str();
     let mut notes = Vec::new();
     for (m, n) in terrain.materials.iter().zip(terrain.triangles_per_material()) {
         if n == 0 {
