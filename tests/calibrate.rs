@@ -626,25 +626,14 @@ fn profile_loop_adds_nothing_without_a_hidden_effect() {
     }
 }
 
-/// Settings for the 3DRB effects-loop tests: the study's `zone` and `control_c` cases at half their runs (36),
-/// with fewer repeats, evaluations and permutations than the defaults (the full study: `cargo run --release
+/// The 3DRB effects loop on the study's `zone` and `control_c` cases at half their runs (36), with the small
+/// settings of [`tiny_3d`] and 4 repeats in the search and the screening (the full study: `cargo run --release
 /// --example calibration_study -- zone control_c*`, docs/calibration.md). About 70 and 50 s in release on 2 cores.
 fn rigid_body_loop(name: &str) -> talus::calibrate::report::Report {
     let spec = Synthetic3d { runs_per_group: 3, ..case_3d(name, 1).unwrap() };
     let model = synthetic_3d(&spec, SimParams::default()).unwrap();
-    let mut cfg = CalibrationConfig {
-        repeats: 6,
-        search_repeats: 4,
-        max_evaluations: Some(12),
-        inner_folds: 3,
-        ..Default::default()
-    };
-    cfg.effects.max_rounds = 1;
-    cfg.effects.max_proposals = 2;
-    cfg.effects.refit_evaluations = Some(6);
-    cfg.effects.cv_refit_evaluations = Some(6);
+    let mut cfg = CalibrationConfig { search_repeats: 4, ..tiny_3d() };
     cfg.effects.screen_repeats = Some(4);
-    cfg.effects.permutations = 199;
     cfg.back_analysis.enabled = false;
     let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
     calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report
