@@ -62,7 +62,7 @@ fn the_shipped_profile_campaigns_are_what_their_command_writes() {
         let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples").join(folder);
         let dir = tempfile::tempdir().unwrap();
         let spec = talus::calibrate::synthetic::case_2d(case, 1).unwrap();
-        talus::calibrate::synthetic::write_profile_campaign(&spec, dir.path()).unwrap();
+        talus::calibrate::synthetic::write_profile_campaign(&spec, dir.path(), 0.0).unwrap();
         let mut files = vec!["release_points.csv", "observed_deposition.csv", "block_metadata.csv", "profile.csv"];
         files.extend(tracked.then_some("observed_trajectories.csv"));
         assert_eq!(dir.path().join("observed_trajectories.csv").exists(), tracked, "{folder}");
@@ -665,7 +665,7 @@ fn observed_runs(dir: &std::path::Path) -> usize {
 
 fn write_profile_campaign(dir: &std::path::Path) {
     let spec = Synthetic2d { seed: 5, runs_per_group: 3, ..Default::default() };
-    talus::calibrate::synthetic::write_profile_campaign(&spec, dir).unwrap();
+    talus::calibrate::synthetic::write_profile_campaign(&spec, dir, 0.0).unwrap();
 }
 
 #[test]

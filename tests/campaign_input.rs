@@ -198,7 +198,7 @@ fn the_shipped_and_written_campaigns_still_read() {
     use talus::calibrate::synthetic::{case_2d, case_3d, write_profile_campaign, write_terrain_campaign};
     let dir = tempfile::tempdir().unwrap();
     let spec = talus::calibrate::synthetic::Synthetic2d { runs_per_group: 2, ..case_2d("speed_tracked", 1).unwrap() };
-    write_profile_campaign(&spec, dir.path()).unwrap();
+    write_profile_campaign(&spec, dir.path(), 0.0).unwrap();
     open_model(dir.path(), &dir.path().join("profile.csv"), ModelKind::Lumped2d, &cfg, "settings").unwrap();
     let dir = tempfile::tempdir().unwrap();
     let spec = talus::calibrate::synthetic::Synthetic3d { runs_per_group: 2, ..case_3d("speed", 1).unwrap() };

@@ -576,7 +576,7 @@ mod tests {
 
         let spec = Synthetic2d::default();
         let dir = tempfile::tempdir().unwrap();
-        write_profile_campaign(&spec, dir.path()).unwrap();
+        write_profile_campaign(&spec, dir.path(), 0.0).unwrap();
         let campaign = Campaign::read(dir.path()).unwrap();
         let first = &campaign.releases[0];
         let profile = synthetic_profile(&spec.profile).unwrap();
@@ -605,7 +605,7 @@ mod tests {
         let synth = synthetic_2d(&spec, Options2d::default()).unwrap();
         // The same campaign as files, as `talus calibrate` reads them.
         let dir = tempfile::tempdir().unwrap();
-        write_profile_campaign(&spec, dir.path()).unwrap();
+        write_profile_campaign(&spec, dir.path(), 0.0).unwrap();
         let profile_file = dir.path().join("profile.csv");
         let (runs, groups) = (synth.runs().to_vec(), synth.group_names().to_vec());
         let campaign = Campaign::read(dir.path()).unwrap();

@@ -591,12 +591,13 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
 /// Writes the synthetic 2DLM campaign of `spec` into the folder `dir` as a user's field campaign would be: the
 /// campaign CSVs (`release_points.csv`, `observed_deposition.csv`, `block_metadata.csv`) and the profile as
 /// `profile.csv`, ready for `talus calibrate DIR --terrain DIR/profile.csv --model 2dlm`. A tracked case also gets
-/// `observed_trajectories.csv`: each run's true path ([`Model2d::tracks`]) every millisecond to 1 mm, without
-/// tracking noise (the campaign in memory adds noise of sd `track_noise_m` to each height).
+/// `observed_trajectories.csv`: each run's true path ([`Model2d::tracks`]) every millisecond to 1 mm, every height
+/// plus Gaussian noise of sd `track_point_noise_m` (0 for exact tracks; the campaign in memory adds noise of sd
+/// `track_noise_m` to each height).
 ///
 /// # Errors
 /// The campaign cannot be simulated, or a file cannot be written.
-pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path) -> Result<()> {
+pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path, track_point_noise_m: f64) -> Result<()> {
     let model = synthetic_2d(spec, Options2d::default())?;
     let mut release = String::from("trajectory_id,x_m,z_m,vx_mps,vz_mps,wy_radps,block_id\n");
     let mut rest = String::from("trajectory_id,x_m,z_m,block_id\n");
@@ -619,8 +620,12 @@ pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path) -> Result<()> {
         crate::io::write_bytes_atomic(&dir.join(name), text.as_bytes())?;
     }
     if spec.track_noise_m.is_some() {
-        let tracks =
-            observed_tracks(model.runs(), model.tracks(&truth_2d(spec), 0, data_seed(spec.seed))?, 0.0, spec.seed);
+        let tracks = observed_tracks(
+            model.runs(),
+            model.tracks(&truth_2d(spec), 0, data_seed(spec.seed))?,
+            track_point_noise_m,
+            spec.seed,
+        );
         let csv =
             tracks_csv("trajectory_id,time_s,x_m,z_m", model.runs(), &tracks, |p| format!("{:.3},{:.3}", p[0], p[2]));
         crate::io::write_bytes_atomic(&dir.join("observed_trajectories.csv"), csv.as_bytes())?;
@@ -787,7 +792,7 @@ mod tests {
         // simulations of the same runs did (to the millimetres the file keeps).
         let spec = Synthetic2d { runs_per_group: 2, ..case_2d("speed_tracked", 1).unwrap() };
         let dir = tempfile::tempdir().unwrap();
-        write_profile_campaign(&spec, dir.path()).unwrap();
+        write_profile_campaign(&spec, dir.path(), 0.0).unwrap();
         let campaign = crate::campaign::Campaign::read(dir.path()).unwrap();
         assert_eq!(campaign.tracks.len(), campaign.releases.len());
         let (runs, groups) = super::super::runs::field_runs(&campaign, 2.0).unwrap();
