@@ -7,7 +7,7 @@
 //! were written by it.
 //!
 //! Run: cargo run --release --example write_profile_campaign -- DIR [CASE [TRACK_POINT_NOISE_M]]
-use talus::calibrate::synthetic::{case_2d, write_profile_campaign};
+use talus::calibrate::synthetic::{case_2d, track_noise_arg, write_profile_campaign};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -15,14 +15,10 @@ fn main() {
         eprintln!("usage: write_profile_campaign DIR [CASE [TRACK_POINT_NOISE_M]]");
         std::process::exit(2);
     };
-    let noise_m = match args.get(2).map(|s| s.parse::<f64>()) {
-        None => 0.0,
-        Some(Ok(v)) if v.is_finite() && v >= 0.0 => v,
-        Some(_) => {
-            eprintln!("error: TRACK_POINT_NOISE_M must be a non-negative number of metres, e.g. 0.1");
-            std::process::exit(2);
-        }
-    };
+    let noise_m = track_noise_arg(args.get(2).map(String::as_str)).unwrap_or_else(|e| {
+        eprintln!("error: {e}");
+        std::process::exit(2);
+    });
     let Some(spec) = case_2d(case, 1) else {
         eprintln!("error: no 2DLM case `{case}`; try zone, speed, size, speed_tracked or control_a");
         std::process::exit(2);

@@ -6,7 +6,7 @@
 //! --model 3drb` on files whose truth is known.
 //!
 //! Run: cargo run --release --example write_terrain_campaign -- DIR CASE [TRACK_POINT_NOISE_M [SEED]]
-use talus::calibrate::synthetic::{case_3d, write_terrain_campaign};
+use talus::calibrate::synthetic::{case_3d, track_noise_arg, write_terrain_campaign};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -14,14 +14,10 @@ fn main() {
         eprintln!("usage: write_terrain_campaign DIR CASE [TRACK_POINT_NOISE_M [SEED]]");
         std::process::exit(2);
     };
-    let noise_m = match args.get(2).map(|s| s.parse::<f64>()) {
-        None => 0.0,
-        Some(Ok(v)) if v.is_finite() && v >= 0.0 => v,
-        Some(_) => {
-            eprintln!("error: TRACK_POINT_NOISE_M must be a non-negative number of metres, e.g. 0.1");
-            std::process::exit(2);
-        }
-    };
+    let noise_m = track_noise_arg(args.get(2).map(String::as_str)).unwrap_or_else(|e| {
+        eprintln!("error: {e}");
+        std::process::exit(2);
+    });
     let Ok(seed) = args.get(3).map_or(Ok(1), |s| s.parse::<u64>()) else {
         eprintln!("error: SEED must be a whole number, e.g. 2");
         std::process::exit(2);

@@ -588,6 +588,19 @@ pub fn synthetic_2d(spec: &Synthetic2d, options: Options2d) -> Result<Model2d> {
     model.with_tracks(&tracks, spec.track_noise_m)
 }
 
+/// The tracks' height noise as given to the campaign writers (`write_profile_campaign`, `write_terrain_campaign`
+/// examples): none is 0 (exact tracks); otherwise a non-negative number of metres.
+///
+/// # Errors
+/// The text is not a finite non-negative number.
+pub fn track_noise_arg(text: Option<&str>) -> std::result::Result<f64, String> {
+    match text.map(str::parse::<f64>) {
+        None => Ok(0.0),
+        Some(Ok(v)) if v.is_finite() && v >= 0.0 => Ok(v),
+        Some(_) => Err("TRACK_POINT_NOISE_M must be a non-negative number of metres, e.g. 0.1".into()),
+    }
+}
+
 /// Writes the synthetic 2DLM campaign of `spec` into the folder `dir` as a user's field campaign would be: the
 /// campaign CSVs (`release_points.csv`, `observed_deposition.csv`, `block_metadata.csv`) and the profile as
 /// `profile.csv`, ready for `talus calibrate DIR --terrain DIR/profile.csv --model 2dlm`. A tracked case also gets
