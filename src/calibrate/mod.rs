@@ -190,7 +190,8 @@ pub fn calibrate(
         if let Some(scatter) = track_scatter {
             let hint = if model.track_noise_m().is_none() && scatter >= rebound::TRACK_SCATTER_HINT_M {
                 format!(
-                    " (tracking noise raises observed rebounds: if it is that, declare track_noise_m = {scatter:.2})"
+                    " (tracking noise raises observed rebounds: if it is that, declare track_noise_m = {scatter:.2} \
+                     for a fair rebound score, and compare the fit with this one: README, tracked paths)"
                 )
             } else {
                 String::new()
