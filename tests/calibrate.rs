@@ -972,6 +972,29 @@ fn tschamut_with(cfg: &CalibrationConfig) -> Box<dyn Model> {
 }
 
 #[test]
+fn a_3drb_calibration_warns_of_what_its_terrain_does_not_use() {
+    // A material_names entry no name of the proxy DEM carries: the model keeps the terrain's note, and the
+    // calibration logs it and writes it into report.json and report.md, as `talus run` warns.
+    let mut cfg = CalibrationConfig { repeats: 2, search_repeats: 1, max_evaluations: Some(2), ..Default::default() };
+    cfg.terrain.material_names.insert("scree".into(), "default".into());
+    cfg.effects.max_rounds = 0;
+    cfg.back_analysis.enabled = false;
+    let model = tschamut_with(&cfg);
+    let note = "terrain.material_names.scree is not used";
+    assert!(model.terrain_notes().iter().any(|n| n.starts_with(note)), "{:?}", model.terrain_notes());
+    let (cal, hold) = split::seeded_split(model.runs(), 0.25, 1);
+    let (cal, hold) = (&cal[..12], &hold[..4]);
+    let dir = tempfile::tempdir().unwrap();
+    let logged = std::sync::Mutex::new(String::new());
+    let log = |m: &str| logged.lock().unwrap().push_str(&format!("{m}\n"));
+    let r = calibrate(model.as_ref(), &cfg, cal, hold, "seeded", Some(dir.path()), &log).unwrap().report;
+    assert!(logged.into_inner().unwrap().contains(&format!("warning: {note}")));
+    assert!(r.warnings.iter().any(|n| n.starts_with(note)), "{:?}", r.warnings);
+    let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(md.contains(&format!("**Warning:** {note}")), "report.md lacks the warning");
+}
+
+#[test]
 fn folds_can_spread_each_release_point_over_the_folds() {
     // Tschamut's block 2 has five runs from its upper release point; with one release group per block (100 m),
     // seed 2 holds three of them out together, and no fold's calibration is left to say how that point behaves.

@@ -141,6 +141,9 @@ pub fn calibrate(
     }
     // A library caller may not have come through `open_model`: an effect name it cannot use is an error here too.
     cfg.check_effects(model.kind(), "calibration settings")?;
+    for note in model.terrain_notes() {
+        log(&format!("warning: {note}"));
+    }
     let t0 = Instant::now();
     let mut cfg = cfg.clone();
     if cfg.rebound_weight.is_none() {
@@ -314,6 +317,7 @@ pub fn calibrate(
         split: split.into(),
         release_groups,
         duplicate_runs: runs::duplicate_runs(runs),
+        warnings: model.terrain_notes().to_vec(),
         runs_not_started: not_started,
         runs_stalling: stalling,
         baseline: report::Stage::new(

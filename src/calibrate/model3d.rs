@@ -296,6 +296,10 @@ impl Model for Model3d {
         self.materials[best].clone()
     }
 
+    fn terrain_notes(&self) -> &[String] {
+        &self.terrain.notes
+    }
+
     fn map_frame(&self) -> MapFrame {
         let (x0, y0, x1, y1) = self.terrain.surface.bounds_xy();
         let o = self.terrain.origin;

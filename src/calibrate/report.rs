@@ -99,6 +99,9 @@ pub struct Report {
     /// Pairs of runs that are the same record ([`super::runs::duplicate_runs`]).
     #[serde(default)]
     pub duplicate_runs: Vec<[String; 2]>,
+    /// What building the terrain noticed ([`super::Model::terrain_notes`]), as `talus run` warns.
+    #[serde(default)]
+    pub warnings: Vec<String>,
     /// Runs whose baseline simulations all end at their release while the field rock ran
     /// ([`super::runs::runs_not_started`]).
     #[serde(default)]
@@ -604,6 +607,9 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
     let stages = [&r.baseline.calibration, &r.baseline.holdout, &r.final_stage.calibration, &r.final_stage.holdout];
     if stages.iter().any(|m| below_floor(m)) {
         let _ = writeln!(s, "**The floor:** {BELOW_FLOOR}.\n");
+    }
+    for w in &r.warnings {
+        let _ = writeln!(s, "**Warning:** {w}\n");
     }
     for [a, b] in &r.duplicate_runs {
         let _ = writeln!(
