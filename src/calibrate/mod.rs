@@ -194,7 +194,7 @@ pub fn calibrate(
             let hint = if model.track_noise_m().is_none() && scatter >= rebound::TRACK_SCATTER_HINT_M {
                 format!(
                     " (tracking noise raises observed rebounds: if it is that, declare track_noise_m = {scatter:.2} \
-                     for a fair rebound score, and compare the fit with this one: README, tracked paths)"
+                     for a fair rebound score, and compare the fit with this one: docs/calibration.md, \"Tracked paths\")"
                 )
             } else {
                 String::new()
