@@ -660,6 +660,13 @@ fn an_envelope_of_profile_models_combines_their_envelopes_station_by_station() {
     assert_eq!(spread["min"].as_f64().unwrap(), first[0].min(first[1]));
     assert_eq!(spread["max"].as_f64().unwrap(), first[0].max(first[1]));
     assert!(summary["floor"]["bench_fractions"][1]["max"].is_number());
+    // The console gives the floor's figures too, as ranges over its seeds.
+    let floor_energy: Vec<f64> = (summary["floor"]["models"].as_array().unwrap().iter())
+        .map(|m| m["highest_kinetic_p95_kj"].as_f64().unwrap())
+        .collect();
+    let (lo, hi) = floor_energy.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+    let line = stdout.lines().find(|l| l.contains("seeds alone (2 runs of a)")).unwrap_or_else(|| panic!("{stdout}"));
+    assert!(line.ends_with(&format!("energy P95 {lo:.1}-{hi:.1} kJ")), "{line}");
     let md = std::fs::read_to_string(out.join("envelope.md")).unwrap();
     assert!(md.contains("seeds alone") && md.contains("(bounce_p95_m.svg)"), "{md}");
     let svg = std::fs::read_to_string(out.join("bounce_p95_m.svg")).unwrap();

@@ -208,6 +208,27 @@ fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
             f(m.highest_kinetic_p95_kj, 1)
         );
     }
+    if let Some(fl) = &summary.floor {
+        // The same figures over the first model's seeds, as ranges: the spread the models' rows must exceed.
+        let span = |get: fn(&talus::envelope::profile::ProfileModel) -> Option<f64>, digits: usize| {
+            let v: Vec<f64> = fl.models.iter().filter_map(get).collect();
+            let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+            if v.is_empty() {
+                "-".to_string()
+            } else {
+                format!("{lo:.digits$}-{hi:.digits$}")
+            }
+        };
+        say!(
+            "  seeds alone ({} runs of {}): run-out median {} m (P95 {} m); highest bounce P95 {} m, energy P95 {} kJ",
+            fl.models.len(),
+            summary.models[0].name,
+            span(|m| m.runout_p50_m, 1),
+            span(|m| m.runout_p95_m, 1),
+            span(|m| m.highest_bounce_p95_m, 2),
+            span(|m| m.highest_kinetic_p95_kj, 1)
+        );
+    }
     if let Some(b) = summary.bench_fractions.get(1) {
         let seeds = summary
             .floor
