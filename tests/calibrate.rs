@@ -973,8 +973,9 @@ fn tschamut_with(cfg: &CalibrationConfig) -> Box<dyn Model> {
 
 #[test]
 fn a_3drb_calibration_warns_of_what_its_terrain_does_not_use() {
-    // A material_names entry no name of the proxy DEM carries: the model keeps the terrain's note, and the
-    // calibration logs it and writes it into report.json and report.md, as `talus run` warns.
+    // A material_names entry no name of the proxy DEM carries: the model keeps the terrain's note, the calibration
+    // writes it into report.json and report.md, and the command prints it once (before any fold), as `talus run`
+    // warns.
     let mut cfg = CalibrationConfig { repeats: 2, search_repeats: 1, max_evaluations: Some(2), ..Default::default() };
     cfg.terrain.material_names.insert("scree".into(), "default".into());
     cfg.effects.max_rounds = 0;
@@ -985,13 +986,35 @@ fn a_3drb_calibration_warns_of_what_its_terrain_does_not_use() {
     let (cal, hold) = split::seeded_split(model.runs(), 0.25, 1);
     let (cal, hold) = (&cal[..12], &hold[..4]);
     let dir = tempfile::tempdir().unwrap();
-    let logged = std::sync::Mutex::new(String::new());
-    let log = |m: &str| logged.lock().unwrap().push_str(&format!("{m}\n"));
-    let r = calibrate(model.as_ref(), &cfg, cal, hold, "seeded", Some(dir.path()), &log).unwrap().report;
-    assert!(logged.into_inner().unwrap().contains(&format!("warning: {note}")));
+    let r = calibrate(model.as_ref(), &cfg, cal, hold, "seeded", Some(dir.path()), &quiet).unwrap().report;
     assert!(r.warnings.iter().any(|n| n.starts_with(note)), "{:?}", r.warnings);
     let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(md.contains(&format!("**Warning:** {note}")), "report.md lacks the warning");
+    // The command on a small synthetic campaign as files, with two folds.
+    let spec = Synthetic3d { runs_per_group: 2, release_points: 2, masses_kg: vec![50.0, 400.0], ..Default::default() };
+    let campaign = dir.path().join("campaign");
+    talus::calibrate::synthetic::write_terrain_campaign(&spec, &campaign, 0.0).unwrap();
+    let settings = dir.path().join("cal.toml");
+    std::fs::write(
+        &settings,
+        "search_repeats = 1\nmax_evaluations = 5\n[terrain.material_names]\nscree = \"default\"\n\
+         [effects]\nmax_rounds = 0\n[back_analysis]\nenabled = false\n",
+    )
+    .unwrap();
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
+        .arg("calibrate")
+        .arg(&campaign)
+        .arg("--terrain")
+        .arg(campaign.join("terrain.obj"))
+        .args(["--model", "3drb", "--kfold", "2", "--config"])
+        .arg(&settings)
+        .arg("--out")
+        .arg(dir.path().join("cv"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(err.matches(&format!("warning: {note}")).count(), 1, "{err}");
 }
 
 #[test]

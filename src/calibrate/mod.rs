@@ -141,9 +141,6 @@ pub fn calibrate(
     }
     // A library caller may not have come through `open_model`: an effect name it cannot use is an error here too.
     cfg.check_effects(model.kind(), "calibration settings")?;
-    for note in model.terrain_notes() {
-        log(&format!("warning: {note}"));
-    }
     let t0 = Instant::now();
     let mut cfg = cfg.clone();
     if cfg.rebound_weight.is_none() {
