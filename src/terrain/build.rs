@@ -91,7 +91,6 @@ const SAME_GRID_TOLERANCE: f64 = 1e-6;
 /// other tiles there (when they lie on the same grid: equal cell sizes and cell centres that coincide), so the
 /// strips are triangulated once, by the tile west or north of them. `None` when no other tile adds a cell.
 fn join_tiles(grid: &Grid, others: &[&Grid]) -> Option<Grid> {
-    let same = |a: f64, b: f64, cell: f64| (a - b).abs() <= SAME_GRID_TOLERANCE * cell;
     let neighbours: Vec<&&Grid> = others.iter().filter(|o| on_one_grid(grid, o)).collect();
     if neighbours.is_empty() {
         return None;
@@ -108,9 +107,9 @@ fn join_tiles(grid: &Grid, others: &[&Grid]) -> Option<Grid> {
     for (c, r) in edge {
         let (x, y) = joined.cell_centre(c, r);
         for o in &neighbours {
+            // On one grid, the neighbour's cell under this centre has the same centre.
             let Some((oc, or)) = o.cell_of(x, y) else { continue };
-            let (ox, oy) = o.cell_centre(oc, or);
-            if let Some(z) = o.get(oc, or).filter(|_| same(ox, x, grid.cell_x_m) && same(oy, y, grid.cell_y_m)) {
+            if let Some(z) = o.get(oc, or) {
                 joined.values[r * nc + c] = z;
                 added = true;
                 break;
