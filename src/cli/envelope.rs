@@ -5,7 +5,7 @@ use anyhow::Context;
 use clap::Args;
 use std::path::{Path, PathBuf};
 use talus::envelope::profile::run_profile_envelope;
-use talus::envelope::{model_names, run_envelope};
+use talus::envelope::{model_names, run_envelope, Spread3};
 
 /// Run several scenarios of one terrain with the same seed and combine their hazard rasters cell by cell: the
 /// lowest, median and highest value over the models (GeoTIFF and PNG), and how many models' rocks reach each
@@ -127,12 +127,8 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
             talus::envelope::WELL_SAMPLED_ROCKS
         );
     }
-    let range = |x: &talus::envelope::Spread3, digits: usize| match (x.min, x.max) {
-        (Some(lo), Some(hi)) => format!("{lo:.digits$}-{hi:.digits$}"),
-        _ => "-".to_string(),
-    };
     let zones = |z: &talus::envelope::ZoneSpread| {
-        let ha = |x: &talus::envelope::Spread3| match (x.min, x.max) {
+        let ha = |x: &Spread3| match (x.min, x.max) {
             (Some(lo), Some(hi)) => format!("{:.2}-{:.2}", lo / 1e4, hi / 1e4),
             _ => "-".to_string(),
         };
@@ -211,13 +207,7 @@ fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
     if let Some(fl) = &summary.floor {
         // The same figures over the first model's seeds, as ranges: the spread the models' rows must exceed.
         let span = |get: fn(&talus::envelope::profile::ProfileModel) -> Option<f64>, digits: usize| {
-            let v: Vec<f64> = fl.models.iter().filter_map(get).collect();
-            let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
-            if v.is_empty() {
-                "-".to_string()
-            } else {
-                format!("{lo:.digits$}-{hi:.digits$}")
-            }
+            range(&Spread3::of(fl.models.iter().map(get)), digits)
         };
         say!(
             "  seeds alone ({} runs of {}): run-out median {} m (P95 {} m); highest bounce P95 {} m, energy P95 {} kJ",
@@ -239,4 +229,12 @@ fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
     }
     say!("wrote envelopes.csv, collectors.csv and envelope.md to {}", a.out.display());
     Ok(())
+}
+
+/// "min-max" of `x` with `digits` decimals, `-` when it has none.
+fn range(x: &Spread3, digits: usize) -> String {
+    match (x.min, x.max) {
+        (Some(lo), Some(hi)) => format!("{lo:.digits$}-{hi:.digits$}"),
+        _ => "-".to_string(),
+    }
 }
