@@ -17,6 +17,26 @@ use talus::sim::SimParams;
 
 fn quiet(_: &str) {}
 
+/// `talus calibrate CAMPAIGN --terrain TERRAIN --model MODEL --config SETTINGS ARGS...`, run to its end.
+fn talus_calibrate(
+    campaign: &std::path::Path,
+    terrain: &std::path::Path,
+    model: &str,
+    settings: &std::path::Path,
+    args: &[&str],
+) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
+        .arg("calibrate")
+        .arg(campaign)
+        .arg("--terrain")
+        .arg(terrain)
+        .args(["--model", model, "--config"])
+        .arg(settings)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
 /// Settings for the 2DLM tests: friction and roughness free, spreads fixed at the truth.
 fn config_2d() -> CalibrationConfig {
     let mut cfg = CalibrationConfig::default();
@@ -679,18 +699,7 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     )
     .unwrap();
     std::fs::write(d.join("holdout.txt"), "# held out\np001\np010\np019\n").unwrap();
-    let talus = env!("CARGO_BIN_EXE_talus");
-    let run = |extra: &[&str]| {
-        let mut c = std::process::Command::new(talus);
-        c.arg("calibrate")
-            .arg(d)
-            .arg("--terrain")
-            .arg(d.join("profile.csv"))
-            .args(["--model", "2dlm", "--config"])
-            .arg(d.join("settings.toml"));
-        c.args(extra);
-        c.output().unwrap()
-    };
+    let run = |extra: &[&str]| talus_calibrate(d, &d.join("profile.csv"), "2dlm", &d.join("settings.toml"), extra);
     let out = d.join("out");
     let o = run(&["--holdout", d.join("holdout.txt").to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -727,7 +736,7 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     let campaign = (sc["campaign"]["dir"].as_str(), sc["campaign"]["repeats"].as_integer());
     assert_eq!(campaign, (Some(".."), Some(20)), "{text}");
     let map = out.join("map");
-    let o = std::process::Command::new(talus)
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
         .arg("profile")
         .arg(out.join("calibrated_profile.toml"))
         .arg("--out")
@@ -806,17 +815,13 @@ fn declared_tracking_noise_reads_the_simulated_paths_as_the_tracks_were() {
         let file = dir.path().join(format!("{name}.toml"));
         std::fs::write(&file, settings).unwrap();
         let out = dir.path().join(name);
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
-            .arg("calibrate")
-            .arg(&noisy)
-            .arg("--terrain")
-            .arg(noisy.join("profile.csv"))
-            .args(["--model", "2dlm", "--all-runs", "--config"])
-            .arg(&file)
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
+        let o = talus_calibrate(
+            &noisy,
+            &noisy.join("profile.csv"),
+            "2dlm",
+            &file,
+            &["--all-runs", "--out", out.to_str().unwrap()],
+        );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
@@ -848,17 +853,8 @@ fn command_line_reads_tracked_paths_and_reports_rebound_heights() {
     let (settings, out) = (dir.path().join("settings.toml"), dir.path().join("out"));
     std::fs::write(&settings, "max_evaluations = 20\n[back_analysis]\nenabled = false\n[effects]\nmax_rounds = 0\n")
         .unwrap();
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
-        .arg("calibrate")
-        .arg(&shipped)
-        .arg("--terrain")
-        .arg(shipped.join("profile.csv"))
-        .args(["--model", "2dlm", "--config"])
-        .arg(&settings)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o =
+        talus_calibrate(&shipped, &shipped.join("profile.csv"), "2dlm", &settings, &["--out", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(String::from_utf8_lossy(&o.stderr).contains("calibration runs were tracked"));
     assert!(String::from_utf8_lossy(&o.stdout).contains("held-out rebound_mae_m "));
@@ -911,17 +907,13 @@ fn command_line_reads_tracked_paths_and_reports_rebound_heights() {
     std::fs::write(&settings, format!("rebound_weight = 0\nbounce_weight = 0\nfix_rt_from_tracks = true\n{small}"))
         .unwrap();
     let final_parameters = |campaign: &std::path::Path, out: &std::path::Path| {
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
-            .arg("calibrate")
-            .arg(campaign)
-            .arg("--terrain")
-            .arg(shipped.join("profile.csv"))
-            .args(["--model", "2dlm", "--config"])
-            .arg(&settings)
-            .arg("--out")
-            .arg(out)
-            .output()
-            .unwrap();
+        let o = talus_calibrate(
+            campaign,
+            &shipped.join("profile.csv"),
+            "2dlm",
+            &settings,
+            &["--out", out.to_str().unwrap()],
+        );
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
@@ -1001,17 +993,14 @@ fn a_3drb_calibration_warns_of_what_its_terrain_does_not_use() {
          [effects]\nmax_rounds = 0\n[back_analysis]\nenabled = false\n",
     )
     .unwrap();
-    let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
-        .arg("calibrate")
-        .arg(&campaign)
-        .arg("--terrain")
-        .arg(campaign.join("terrain.obj"))
-        .args(["--model", "3drb", "--kfold", "2", "--config"])
-        .arg(&settings)
-        .arg("--out")
-        .arg(dir.path().join("cv"))
-        .output()
-        .unwrap();
+    let cv = dir.path().join("cv");
+    let o = talus_calibrate(
+        &campaign,
+        &campaign.join("terrain.obj"),
+        "3drb",
+        &settings,
+        &["--kfold", "2", "--out", cv.to_str().unwrap()],
+    );
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert_eq!(err.matches(&format!("warning: {note}")).count(), 1, "{err}");
