@@ -63,11 +63,34 @@ pub const EPSG_CODES: std::ops::Range<u32> = 1..USER_DEFINED as u32;
 ///
 /// Nodata (GDAL_NODATA) and non-finite values become `NaN`. See the module documentation for what is supported.
 pub fn read_grid(path: &Path) -> Result<Grid> {
+    read(path, false)
+}
+
+/// Reads a GeoTIFF given as a DEM: [`read_grid`], refusing 8-bit samples. Values of 0–255 (or −128–127) in steps
+/// of 1 are a picture (a hillshade, a scanned map, a classification), not heights: read as metres they make a
+/// terrain a few hundred metres high in 1 m terraces, and the run ends with numbers nobody can use.
+pub fn read_dem(path: &Path) -> Result<Grid> {
+    read(path, true)
+}
+
+/// [`read_grid`], and with `as_dem` [`read_dem`]'s refusal of 8-bit samples.
+fn read(path: &Path, as_dem: bool) -> Result<Grid> {
     let file = File::open(path).map_err(|e| Error::io(path, e))?;
     let mut dec = Decoder::new(BufReader::new(file)).map_err(|e| tiff_error(path, e))?.with_limits(limits());
     let (width, height) = dec.dimensions().map_err(|e| tiff_error(path, e))?;
     let colortype = dec.colortype().map_err(|e| tiff_error(path, e))?;
     check_colortype(path, colortype)?;
+    if as_dem
+        && matches!(colortype, ColorType::Gray(8) | ColorType::GrayA(8) | ColorType::Multiband { bit_depth: 8, .. })
+    {
+        return Err(Error::format(
+            path.display().to_string(),
+            "the image holds 8-bit values (0 to 255 in steps of 1): a picture such as a hillshade, a scanned map or \
+             a classification, not an elevation grid",
+            "give the DEM itself; if these really are heights in metres, convert them with \
+             `gdal_translate -ot Float32 in.tif dem.tif`",
+        ));
+    }
     let ncols = width as usize;
     let nrows = height as usize;
     let npix = ncols.checked_mul(nrows).filter(|&n| n > 0).ok_or_else(|| {
@@ -380,25 +403,6 @@ fn geokeys_for(path: &Path, crs: &Crs) -> Result<Option<GeoKeys>> {
     let mut directory = vec![1, 1, 0, keys.len() as u16];
     directory.extend(keys.iter().flatten());
     Ok(Some(GeoKeys { directory, double_params: Vec::new(), ascii_params: String::new() }))
-}
-
-/// Reads a GeoTIFF given as a DEM: [`read_grid`], refusing 8-bit samples. Values of 0–255 (or −128–127) in steps
-/// of 1 are a picture (a hillshade, a scanned map, a classification), not heights: read as metres they make a
-/// terrain a few hundred metres high in 1 m terraces, and the run ends with numbers nobody can use.
-pub fn read_dem(path: &Path) -> Result<Grid> {
-    let file = File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut dec = Decoder::new(BufReader::new(file)).map_err(|e| tiff_error(path, e))?.with_limits(limits());
-    let colortype = dec.colortype().map_err(|e| tiff_error(path, e))?;
-    if let ColorType::Gray(8) | ColorType::GrayA(8) | ColorType::Multiband { bit_depth: 8, .. } = colortype {
-        return Err(Error::format(
-            path.display().to_string(),
-            "the image holds 8-bit values (0 to 255 in steps of 1): a picture such as a hillshade, a scanned map or \
-             a classification, not an elevation grid",
-            "give the DEM itself; if these really are heights in metres, convert them with \
-             `gdal_translate -ot Float32 in.tif dem.tif`",
-        ));
-    }
-    read_grid(path)
 }
 
 /// Accepts grey and multi-band images (the first band is read); refuses colour images, whose bands are not heights.
