@@ -40,7 +40,7 @@ fn main() {
         let ctx = Context::new(model.as_ref(), &cfg, &quiet);
         let (start, free) = base_candidate(model.as_ref(), &cfg);
         let t = Instant::now();
-        let (c, search, _) = fit_population(&ctx, &start, &free, &all);
+        let (c, search, _) = fit_population(&ctx, &start, &free, &all, "population fit");
         let sims = evaluate(model.as_ref(), &c, &all, REPEATS, EVALUATION_SEED, cfg.threads).unwrap();
         let params: Vec<String> =
             free.iter().map(|p| format!("{}={:.3}", p.name, c.params.get_or(&p.name, 0.0))).collect();

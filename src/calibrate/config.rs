@@ -32,6 +32,7 @@
 //! # screen_repeats = 20     # simulations per run in the loop's grid screening (default: repeats)
 //! one_se_rule = true        # of the effects that pass, the simplest within one standard error of the best
 //! restart_arms = false     # each arm also tries its effect from the start point of the materials
+//! # fit_arms = true         # each effect arm also fitted again per inner fold (default: 2DLM yes, 3DRB no)
 //! ```
 
 use super::effects::{by_name, effects_for};
@@ -262,6 +263,14 @@ pub struct EffectsConfig {
     /// around it cannot reach that valley, and a rival effect that fits from there wins (docs/calibration.md,
     /// "Scarring drag"). It adds one setting per effect value to every arm but the zone's.
     pub restart_arms: bool,
+    /// Each arm of an effect with a parameter also fits the model with the effect again, as the population fit
+    /// fitted the baseline (its start points and screening), on each inner fold's training runs and on all
+    /// calibration runs, and offers those fits to the screening beside the re-centred grid; the baseline's arm gets
+    /// the same fits without the effect (default true for 2DLM, false for 3DRB, where a fit costs minutes; ours).
+    /// Where the fit without the effect settles in a valley of its own (a 2DLM fit with Rn 0.1 that damps every
+    /// bounce), the effect's valley (Rn 0.6 and a restitution that falls with speed) is out of reach of a grid
+    /// around it (docs/calibration.md, "Arms fitted again").
+    pub fit_arms: Option<bool>,
 }
 
 impl Default for EffectsConfig {
@@ -280,6 +289,7 @@ impl Default for EffectsConfig {
             screen_repeats: None,
             one_se_rule: true,
             restart_arms: false,
+            fit_arms: None,
         }
     }
 }
@@ -458,6 +468,11 @@ impl CalibrationConfig {
         self.effects.cv_refit_evaluations.unwrap_or(default_evaluations(model).2)
     }
 
+    /// Whether each effect arm is also fitted from scratch ([`EffectsConfig::fit_arms`]), for `model`.
+    pub fn fit_arms(&self, model: ModelKind) -> bool {
+        self.effects.fit_arms.unwrap_or(model == ModelKind::Lumped2d)
+    }
+
     /// Simulations per run of each setting in the effects loop's grid screening.
     pub fn screen_repeats(&self) -> usize {
         self.effects.screen_repeats.unwrap_or(self.repeats)
@@ -470,6 +485,7 @@ impl CalibrationConfig {
         c.effects.refit_evaluations = Some(self.refit_evaluations(model));
         c.effects.cv_refit_evaluations = Some(self.cv_refit_evaluations(model));
         c.effects.screen_repeats = Some(self.screen_repeats());
+        c.effects.fit_arms = Some(self.fit_arms(model));
         c
     }
 

@@ -176,6 +176,7 @@ fn screened_starts(
     free: &[FreeParam],
     which: &[usize],
     points: usize,
+    what: &str,
 ) -> Vec<(Vec<f64>, Option<f64>)> {
     let (cfg, x0) = (ctx.cfg, unit_of(start, free));
     if cfg.screen_points == 0 {
@@ -192,7 +193,7 @@ fn screened_starts(
     screened.truncate(points);
     let kept: Vec<String> = screened.iter().map(|(_, v)| format!("{v:.2}")).collect();
     (ctx.log)(&format!(
-        "population fit: {} start points screened; the starts are the best {points} ({} m)",
+        "{what}: {} start points screened; the starts are the best {points} ({} m)",
         cfg.screen_points + 1,
         kept.join(", ")
     ));
@@ -209,22 +210,23 @@ pub fn fit_population(
     start: &Candidate,
     free: &[FreeParam],
     which: &[usize],
+    what: &str,
 ) -> (Candidate, SearchResult, Vec<SearchRecord>) {
     let budget = ctx.cfg.max_evaluations(ctx.model.kind());
     let (streams, points) = (ctx.cfg.search_starts.max(1), ctx.cfg.start_points.max(1));
     if streams * points == 1 && ctx.cfg.screen_points == 0 {
-        let (c, s) = fit(ctx, start, free, which, budget, "population fit", ctx.cfg.seed);
+        let (c, s) = fit(ctx, start, free, which, budget, what, ctx.cfg.seed);
         return (c, s, Vec::new());
     }
     let values = |c: &Candidate| free.iter().map(|p| (p.name.clone(), c.params.get_or(&p.name, f64::NAN))).collect();
     let selection_seed = ctx.cfg.seed.wrapping_add(SELECTION_SEED_OFFSET);
     let mut results = Vec::new();
     let mut records = Vec::new();
-    for (x, screened) in screened_starts(ctx, start, free, which, points) {
+    for (x, screened) in screened_starts(ctx, start, free, which, points, what) {
         let from = with_unit(start, free, &x);
         for k in 0..streams {
             let seed = ctx.cfg.seed.wrapping_add(k as u64);
-            let what = format!("population fit, search {}/{}", results.len() + 1, streams * points);
+            let what = format!("{what}, search {}/{}", results.len() + 1, streams * points);
             let (c, s) = fit(ctx, &from, free, which, budget, &what, seed);
             let selection = ctx.objective_seeded(&c, which, ctx.cfg.repeats, selection_seed);
             (ctx.log)(&format!("{what}: objective {:.2} m on its numbers, {selection:.2} m on fresh ones", s.f));

@@ -41,7 +41,7 @@ use super::effects::{
     definition, effects_for, proposed_by_default, recentring, EffectDef, EffectKind, Recentring, CR_SCALE_GRID,
     MOBILITY_GRID, ZONE_DRAG_GRID, ZONE_MOBILITY_GRID,
 };
-use super::fit::{fit, Context};
+use super::fit::{fit, fit_population, Context};
 use super::impacts::{self, BOUNCE_RESIDUAL};
 use super::model::{Model, RunSims, Sim};
 use super::objective::{run_score, score, score_of};
@@ -235,6 +235,11 @@ pub fn effects_loop(
             base_arm.cands.push(c);
         }
         base_arm.fold_settings = vec![(0..base_arm.settings.len()).collect(); cfg.inner_folds];
+        // With the arms fitted again, so is the baseline: an effect is credited only with what the baseline fitted
+        // again cannot match.
+        if cfg.fit_arms(model.kind()) {
+            base_arm.add_fitted(ctx, &current, &free, cal, &fold_of, "the baseline fitted again")?;
+        }
         let (e0_grid, base_chosen) = cross_validate(ctx, cal, &fold_of, &base_arm.settings, &base_arm.fold_settings);
         let mut e0_refit: Option<Vec<CvError>> = None;
         let mut passed: Vec<Passed> = Vec::new();
@@ -242,6 +247,21 @@ pub fn effects_loop(
         let restart_from = cfg.effects.restart_arms.then(|| with_start_materials(ctx, &current));
         for prop in proposals {
             (ctx.log)(&format!("effects loop, round {round}: trying {}", prop.label));
+            let effect_free = if prop.def.kind == EffectKind::Zone {
+                let mut f = free.clone();
+                f.extend(zone_free(ctx, &prop.label));
+                f
+            } else {
+                let mut f = free.clone();
+                if let Some(param) = prop.def.param {
+                    f.push(FreeParam {
+                        name: format!("{}.{param}", prop.label),
+                        min: prop.def.bounds.0,
+                        max: prop.def.bounds.1,
+                    });
+                }
+                f
+            };
             let arm = if prop.def.kind == EffectKind::Zone {
                 zone_arm(ctx, &base_arm, &prop.label, &diag_sims, cal, &fold_of)?
             } else {
@@ -275,6 +295,10 @@ pub fn effects_loop(
                 }
                 arm.fold_settings = vec![(0..arm.settings.len()).collect(); cfg.inner_folds];
                 arm.full = (0..arm.settings.len()).collect();
+                if cfg.fit_arms(model.kind()) && prop.def.param.is_some() {
+                    let from = effect(&current, values[values.len() / 2]);
+                    arm.add_fitted(ctx, &from, &effect_free, cal, &fold_of, &format!("{} fitted", prop.label))?;
+                }
                 arm
             };
             let (e1_grid, chosen) = cross_validate(ctx, cal, &fold_of, &arm.settings, &arm.fold_settings);
@@ -290,21 +314,6 @@ pub fn effects_loop(
                 .min_by(|a, b| a.0.total_cmp(&b.0))
                 .map(|(_, s)| arm.cands[s].clone())
                 .unwrap_or_else(|| current.clone());
-            let effect_free = if prop.def.kind == EffectKind::Zone {
-                let mut f = free.clone();
-                f.extend(zone_free(ctx, &prop.label));
-                f
-            } else {
-                let mut f = free.clone();
-                if let Some(param) = prop.def.param {
-                    f.push(FreeParam {
-                        name: format!("{}.{param}", prop.label),
-                        min: prop.def.bounds.0,
-                        max: prop.def.bounds.1,
-                    });
-                }
-                f
-            };
             // Promising on the grid: confirm with the refitting cross-validation.
             let screening_cut = if grid_before > 0.0 { 1.0 - grid_after / grid_before } else { 0.0 };
             let (before, after) = if screening_cut >= cfg.effects.min_improvement && full.effect(&prop.label).is_some()
@@ -918,6 +927,37 @@ struct Arm {
     cands: Vec<Candidate>,
     fold_settings: Vec<Vec<usize>>,
     full: Vec<usize>,
+}
+
+impl Arm {
+    /// Adds `free` fitted from `from` as the baseline was ([`fit_population`]): on each inner fold's training runs,
+    /// a setting only that fold may choose, and on all calibration runs, one for the choice on all of them. No fit
+    /// sees the runs it is scored on in the cross-validation.
+    fn add_fitted(
+        &mut self,
+        ctx: &Context,
+        from: &Candidate,
+        free: &[FreeParam],
+        cal: &[usize],
+        fold_of: &[usize],
+        what: &str,
+    ) -> crate::Result<()> {
+        let k = self.fold_settings.len();
+        for f in 0..=k {
+            let train: Vec<usize> = (0..cal.len()).filter(|&j| f == k || fold_of[j] != f).map(|j| cal[j]).collect();
+            let on = if f < k { format!("{what}, fold {}", f + 1) } else { what.to_string() };
+            let c = fit_population(ctx, from, free, &train, &on).0;
+            self.settings.push(ctx.sims(&screened(ctx, &c), cal, ctx.cfg.screen_repeats())?);
+            self.cands.push(c);
+            let s = self.settings.len() - 1;
+            if f < k {
+                self.fold_settings[f].push(s);
+            } else {
+                self.full.push(s);
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The zone arm: candidate zones per fold from the training runs' deposition excess and overrun band, and from all

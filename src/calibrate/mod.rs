@@ -218,7 +218,7 @@ pub fn calibrate(
     let runs = model.runs();
     let (start, free) = base_candidate(model, cfg);
     log(&format!("population fit of {} free parameters on {} runs", free.len(), cal.len()));
-    let (baseline, search, searches) = fit::fit_population(&ctx, &start, &free, cal);
+    let (baseline, search, searches) = fit::fit_population(&ctx, &start, &free, cal, "population fit");
     let t_fit = t0.elapsed().as_secs_f64();
     let back =
         if cfg.back_analysis.enabled { backanalysis::back_analyse(&ctx, &baseline, &free, cal) } else { Vec::new() };
