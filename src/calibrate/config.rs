@@ -468,7 +468,7 @@ impl CalibrationConfig {
         self.effects.cv_refit_evaluations.unwrap_or(default_evaluations(model).2)
     }
 
-    /// Whether each effect arm is also fitted from scratch ([`EffectsConfig::fit_arms`]), for `model`.
+    /// Whether each effect arm is also fitted again ([`EffectsConfig::fit_arms`]), for `model`.
     pub fn fit_arms(&self, model: ModelKind) -> bool {
         self.effects.fit_arms.unwrap_or(model == ModelKind::Lumped2d)
     }

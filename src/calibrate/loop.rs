@@ -247,21 +247,13 @@ pub fn effects_loop(
         let restart_from = cfg.effects.restart_arms.then(|| with_start_materials(ctx, &current));
         for prop in proposals {
             (ctx.log)(&format!("effects loop, round {round}: trying {}", prop.label));
-            let effect_free = if prop.def.kind == EffectKind::Zone {
-                let mut f = free.clone();
-                f.extend(zone_free(ctx, &prop.label));
-                f
-            } else {
-                let mut f = free.clone();
-                if let Some(param) = prop.def.param {
-                    f.push(FreeParam {
-                        name: format!("{}.{param}", prop.label),
-                        min: prop.def.bounds.0,
-                        max: prop.def.bounds.1,
-                    });
-                }
-                f
-            };
+            let mut effect_free = free.clone();
+            if prop.def.kind == EffectKind::Zone {
+                effect_free.extend(zone_free(ctx, &prop.label));
+            } else if let Some(param) = prop.def.param {
+                let (min, max) = prop.def.bounds;
+                effect_free.push(FreeParam { name: format!("{}.{param}", prop.label), min, max });
+            }
             let arm = if prop.def.kind == EffectKind::Zone {
                 zone_arm(ctx, &base_arm, &prop.label, &diag_sims, cal, &fold_of)?
             } else {
