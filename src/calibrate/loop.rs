@@ -56,6 +56,7 @@ use super::zone::zone_check;
 use crate::random::stream;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::sync::atomic::Ordering;
 
 /// An effect the loop tried.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -935,10 +936,14 @@ impl Arm {
         what: &str,
     ) -> crate::Result<()> {
         let k = self.fold_settings.len();
+        // The fits run quietly (a few hundred progress lines an arm otherwise); their simulations still count.
+        let quiet = |_: &str| {};
+        let inner = Context::new(ctx.model, ctx.cfg, &quiet);
+        let mut objectives = Vec::new();
         for f in 0..=k {
             let train: Vec<usize> = (0..cal.len()).filter(|&j| f == k || fold_of[j] != f).map(|j| cal[j]).collect();
-            let on = if f < k { format!("{what}, fold {}", f + 1) } else { what.to_string() };
-            let c = fit_population(ctx, from, free, &train, &on).0;
+            let (c, search, _) = fit_population(&inner, from, free, &train, what);
+            objectives.push(search.f);
             self.settings.push(ctx.sims(&screened(ctx, &c), cal, ctx.cfg.screen_repeats())?);
             self.cands.push(c);
             let s = self.settings.len() - 1;
@@ -948,6 +953,12 @@ impl Arm {
                 self.full.push(s);
             }
         }
+        ctx.simulations.fetch_add(inner.simulations.load(Ordering::Relaxed), Ordering::Relaxed);
+        let folds = objectives[..k].iter().map(|v| format!("{v:.2}")).collect::<Vec<_>>().join(", ");
+        (ctx.log)(&format!(
+            "  {what}: objective {folds} m on each fold's training runs, {:.2} m on all calibration runs",
+            objectives[k]
+        ));
         Ok(())
     }
 }
