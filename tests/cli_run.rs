@@ -477,6 +477,15 @@ fn an_envelope_combines_models_run_with_one_seed_and_measures_the_seeds_alone() 
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("2 models, 120 rocks each with seed 3") && stdout.contains("seeds alone"), "{stdout}");
+    // The floor's own rows, printed as ranges over its seeds and kept in envelope.json.
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("envelope.json")).unwrap()).unwrap();
+    let p50: Vec<f64> =
+        json["floor"]["models"].as_array().unwrap().iter().map(|m| m["runout_m"]["p50"].as_f64().unwrap()).collect();
+    assert_eq!(p50.len(), 2);
+    let line =
+        format!("seeds alone (2 runs of a): run-out median {:.1}-{:.1} m", p50[0].min(p50[1]), p50[0].max(p50[1]));
+    assert!(stdout.contains(&line), "{line} not in {stdout}");
 
     // Each model's run is `talus run` with the common seed, to the byte.
     let alone = dir.path().join("b_alone");

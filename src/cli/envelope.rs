@@ -99,6 +99,23 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
             eprintln!("warning: model {}: {w}", m.name);
         }
     }
+    if let Some(fl) = &summary.floor {
+        // The same figures over the first model's seeds, as ranges: the spread the models' rows must exceed.
+        let span = |get: fn(&talus::envelope::EnvelopeModel) -> f64, digits: usize| {
+            range(&Spread3::of(fl.models.iter().map(|m| Some(get(m)))), digits)
+        };
+        say!(
+            "  seeds alone ({} runs of {}): run-out median {} m (P95 {} m); largest energy P95 {} kJ; largest bounce \
+             P50 {} m, P95 {} m",
+            fl.models.len(),
+            summary.models[0].name,
+            span(|m| m.runout_m.p50, 1),
+            span(|m| m.runout_m.p95, 1),
+            span(|m| m.max_kinetic_kj.p95, 1),
+            span(|m| m.max_bounce_m.p50, 2),
+            span(|m| m.max_bounce_m.p95, 2)
+        );
+    }
     say!(
         "(max - min) / median over the models, in the median cell and at P95, over the cells at least {} rocks of \
          every model reach:",

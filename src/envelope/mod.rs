@@ -178,6 +178,8 @@ pub struct EnvelopeSummary {
 /// The spread between runs of the first model with other seeds (`--floor`).
 #[derive(Debug, Clone, Serialize)]
 pub struct FloorSpread {
+    /// The first model's runs, one per seed.
+    pub models: Vec<EnvelopeModel>,
     /// Each raster's spread.
     pub rasters: Vec<RasterSpread>,
     /// The hazard zones'.
@@ -339,7 +341,8 @@ pub fn run_envelope(
             &format!("the first model, {}, with seeds {seed} to {}", models[0].1, seed.wrapping_add(n as u64 - 1)),
         )?;
         summary.outputs.push("floor/".into());
-        summary.floor = Some(FloorSpread { rasters: f.rasters, zones: f.zones, collectors: f.collectors });
+        summary.floor =
+            Some(FloorSpread { models: f.models, rasters: f.rasters, zones: f.zones, collectors: f.collectors });
     }
     summary.wall_time_s = t0.elapsed().as_secs_f64();
     write_summary(out_dir, &summary, &format!("{n} models, each with seed {seed}"))?;
