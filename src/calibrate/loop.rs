@@ -232,8 +232,7 @@ pub fn effects_loop(
         for &m in &MOBILITY_GRID {
             let mut c = current.clone();
             c.params.set(MOBILITY, m);
-            base_arm.settings.push(ctx.sims(&screened(ctx, &c), cal, cfg.screen_repeats())?);
-            base_arm.cands.push(c);
+            base_arm.screen(ctx, cal, c)?;
         }
         base_arm.fold_settings = vec![(0..base_arm.settings.len()).collect(); cfg.inner_folds];
         // With the arms fitted again, so is the baseline: an effect is credited only with what the baseline fitted
@@ -258,7 +257,6 @@ pub fn effects_loop(
             let arm = if prop.def.kind == EffectKind::Zone {
                 zone_arm(ctx, &base_arm, &prop.label, &diag_sims, cal, &fold_of)?
             } else {
-                let mut arm = Arm::default();
                 let values: Vec<Option<f64>> = if prop.def.grid.is_empty() {
                     vec![None]
                 } else {
@@ -269,6 +267,7 @@ pub fn effects_loop(
                 let effect = |from: &Candidate, v| {
                     with_effect(model, from, prop.def, &prop.label, prop.material.clone(), v, &centre)
                 };
+                let mut cands = Vec::new();
                 for &v in &values {
                     for &m in axis {
                         let mut c = effect(&current, v);
@@ -277,14 +276,15 @@ pub fn effects_loop(
                             Recentring::DynamicFriction => scale_dynamic_friction(&mut c, m),
                             Recentring::Mobility => c.params.set(MOBILITY, m),
                         }
-                        arm.cands.push(c);
+                        cands.push(c);
                     }
                 }
                 if let Some(from) = &restart_from {
-                    arm.cands.extend(values.iter().map(|&v| effect(from, v)));
+                    cands.extend(values.iter().map(|&v| effect(from, v)));
                 }
-                for c in &arm.cands {
-                    arm.settings.push(ctx.sims(&screened(ctx, c), cal, cfg.screen_repeats())?);
+                let mut arm = Arm::default();
+                for c in cands {
+                    arm.screen(ctx, cal, c)?;
                 }
                 arm.fold_settings = vec![(0..arm.settings.len()).collect(); cfg.inner_folds];
                 arm.full = (0..arm.settings.len()).collect();
@@ -923,6 +923,14 @@ struct Arm {
 }
 
 impl Arm {
+    /// Adds candidate `c` with its simulations of the calibration runs `cal` for the screening (`screen_repeats`
+    /// each); returns its setting's index.
+    fn screen(&mut self, ctx: &Context, cal: &[usize], c: Candidate) -> crate::Result<usize> {
+        self.settings.push(ctx.sims(&screened(ctx, &c), cal, ctx.cfg.screen_repeats())?);
+        self.cands.push(c);
+        Ok(self.settings.len() - 1)
+    }
+
     /// Adds `free` fitted from `from` as the baseline was ([`fit_population`]): on each inner fold's training runs,
     /// a setting only that fold may choose, and on all calibration runs, one for the choice on all of them. No fit
     /// sees the runs it is scored on in the cross-validation.
@@ -944,9 +952,7 @@ impl Arm {
             let train: Vec<usize> = (0..cal.len()).filter(|&j| f == k || fold_of[j] != f).map(|j| cal[j]).collect();
             let (c, search, _) = fit_population(&inner, from, free, &train, what);
             objectives.push(search.f);
-            self.settings.push(ctx.sims(&screened(ctx, &c), cal, ctx.cfg.screen_repeats())?);
-            self.cands.push(c);
-            let s = self.settings.len() - 1;
+            let s = self.screen(ctx, cal, c)?;
             if f < k {
                 self.fold_settings[f].push(s);
             } else {

@@ -101,19 +101,16 @@ pub fn run(a: EnvelopeArgs) -> anyhow::Result<()> {
     }
     if let Some(fl) = &summary.floor {
         // The same figures over the first model's seeds, as ranges: the spread the models' rows must exceed.
-        let span = |get: fn(&talus::envelope::EnvelopeModel) -> f64, digits: usize| {
-            range(&Spread3::of(fl.models.iter().map(|m| Some(get(m)))), digits)
-        };
         say!(
             "  seeds alone ({} runs of {}): run-out median {} m (P95 {} m); largest energy P95 {} kJ; largest bounce \
              P50 {} m, P95 {} m",
             fl.models.len(),
             summary.models[0].name,
-            span(|m| m.runout_m.p50, 1),
-            span(|m| m.runout_m.p95, 1),
-            span(|m| m.max_kinetic_kj.p95, 1),
-            span(|m| m.max_bounce_m.p50, 2),
-            span(|m| m.max_bounce_m.p95, 2)
+            span(&fl.models, |m| Some(m.runout_m.p50), 1),
+            span(&fl.models, |m| Some(m.runout_m.p95), 1),
+            span(&fl.models, |m| Some(m.max_kinetic_kj.p95), 1),
+            span(&fl.models, |m| Some(m.max_bounce_m.p50), 2),
+            span(&fl.models, |m| Some(m.max_bounce_m.p95), 2)
         );
     }
     say!(
@@ -223,17 +220,14 @@ fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
     }
     if let Some(fl) = &summary.floor {
         // The same figures over the first model's seeds, as ranges: the spread the models' rows must exceed.
-        let span = |get: fn(&talus::envelope::profile::ProfileModel) -> Option<f64>, digits: usize| {
-            range(&Spread3::of(fl.models.iter().map(get)), digits)
-        };
         say!(
             "  seeds alone ({} runs of {}): run-out median {} m (P95 {} m); highest bounce P95 {} m, energy P95 {} kJ",
             fl.models.len(),
             summary.models[0].name,
-            span(|m| m.runout_p50_m, 1),
-            span(|m| m.runout_p95_m, 1),
-            span(|m| m.highest_bounce_p95_m, 2),
-            span(|m| m.highest_kinetic_p95_kj, 1)
+            span(&fl.models, |m| m.runout_p50_m, 1),
+            span(&fl.models, |m| m.runout_p95_m, 1),
+            span(&fl.models, |m| m.highest_bounce_p95_m, 2),
+            span(&fl.models, |m| m.highest_kinetic_p95_kj, 1)
         );
     }
     if let Some(b) = summary.bench_fractions.get(1) {
@@ -246,6 +240,11 @@ fn run_profiles(a: &EnvelopeArgs) -> anyhow::Result<()> {
     }
     say!("wrote envelopes.csv, collectors.csv and envelope.md to {}", a.out.display());
     Ok(())
+}
+
+/// "min-max" of `get` over `models` (a floor's runs) with `digits` decimals.
+fn span<T>(models: &[T], get: impl Fn(&T) -> Option<f64>, digits: usize) -> String {
+    range(&Spread3::of(models.iter().map(get)), digits)
 }
 
 /// "min-max" of `x` with `digits` decimals, `-` when it has none.
