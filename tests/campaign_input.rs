@@ -200,6 +200,12 @@ fn the_shipped_and_written_campaigns_still_read() {
     let spec = talus::calibrate::synthetic::Synthetic2d { runs_per_group: 2, ..case_2d("speed_tracked", 1).unwrap() };
     write_profile_campaign(&spec, dir.path(), 0.0).unwrap();
     open_model(dir.path(), &dir.path().join("profile.csv"), ModelKind::Lumped2d, &cfg, "settings").unwrap();
+    // Here the survey noise puts run p046's rest 0.93 m past the profile's end (x 200 m): written at the end.
+    let dir = tempfile::tempdir().unwrap();
+    write_profile_campaign(&case_2d("control_a_tracked", 1).unwrap(), dir.path(), 0.0).unwrap();
+    open_model(dir.path(), &dir.path().join("profile.csv"), ModelKind::Lumped2d, &cfg, "settings").unwrap();
+    let rests = std::fs::read_to_string(dir.path().join("observed_deposition.csv")).unwrap();
+    assert!(rests.lines().any(|l| l.starts_with("p046,200,")), "{rests}");
     let dir = tempfile::tempdir().unwrap();
     let spec = talus::calibrate::synthetic::Synthetic3d { runs_per_group: 2, ..case_3d("speed", 1).unwrap() };
     write_terrain_campaign(&spec, dir.path(), 0.0).unwrap();

@@ -606,12 +606,16 @@ pub fn track_noise_arg(text: Option<&str>) -> std::result::Result<f64, String> {
 /// `profile.csv`, ready for `talus calibrate DIR --terrain DIR/profile.csv --model 2dlm`. A tracked case also gets
 /// `observed_trajectories.csv`: each run's true path ([`Model2d::tracks`]) every millisecond to 1 mm, every height
 /// plus Gaussian noise of sd `track_point_noise_m` (0 for exact tracks; the campaign in memory adds noise of sd
-/// `track_noise_m` to each height).
+/// `track_noise_m` to each height). A rest point its survey noise puts past an end of the profile (a rock that ran
+/// off the end) is written at that end, as a surveyor measuring along the profile would record it: `talus calibrate`
+/// refuses rest points off the profile.
 ///
 /// # Errors
 /// The campaign cannot be simulated, or a file cannot be written.
 pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path, track_point_noise_m: f64) -> Result<()> {
     let model = synthetic_2d(spec, Options2d::default())?;
+    let profile = synthetic_profile(&spec.profile)?;
+    let (x0, x1) = profile.x_range_m();
     let mut release = String::from("trajectory_id,x_m,z_m,vx_mps,vz_mps,wy_radps,block_id\n");
     let mut rest = String::from("trajectory_id,x_m,z_m,block_id\n");
     let mut blocks = BTreeMap::new();
@@ -619,7 +623,7 @@ pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path, track_point_noise_
         let [vx, _, vz] = r.velocity_mps;
         let state = [r.release_m[0], r.release_m[2], vx, vz, r.spin_radps[1]].map(|v| v.to_string()).join(",");
         release += &format!("{},{state},{}\n", r.id, r.block_id);
-        rest += &format!("{},{},{},{}\n", r.id, r.rest_m[0], r.rest_m[2], r.block_id);
+        rest += &format!("{},{},{},{}\n", r.id, r.rest_m[0].clamp(x0, x1), r.rest_m[2], r.block_id);
         blocks.insert(r.block_id.clone(), (r.mass_kg, r.size_m));
     }
     let mut block_csv = String::from("block_id,mass_kg,size_x_m,size_y_m,size_z_m\n");
@@ -643,7 +647,7 @@ pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path, track_point_noise_
             tracks_csv("trajectory_id,time_s,x_m,z_m", model.runs(), &tracks, |p| format!("{:.3},{:.3}", p[0], p[2]));
         crate::io::write_bytes_atomic(&dir.join("observed_trajectories.csv"), csv.as_bytes())?;
     }
-    synthetic_profile(&spec.profile)?.write_csv(&dir.join("profile.csv"))
+    profile.write_csv(&dir.join("profile.csv"))
 }
 
 /// Writes the synthetic 3DRB campaign of `spec` into the folder `dir` as a user's field campaign would be: the
