@@ -370,11 +370,7 @@ impl ScenarioFile {
     pub fn read(path: &Path) -> Result<ScenarioFile> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         toml::from_str(&text).map_err(|e| {
-            let line = e.span().map(|s| text[..s.start].lines().count().max(1));
-            let location = match line {
-                Some(l) => format!("{}:{l}", path.display()),
-                None => path.display().to_string(),
-            };
+            let location = crate::io::toml_location(&text, &path.display().to_string(), &e);
             let mut message = e.message().to_string();
             // [simulation] is the only table with flattened keys, where serde cannot list the keys it expects.
             if message.starts_with("unknown field") && !message.contains("expected") {

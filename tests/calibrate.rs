@@ -780,6 +780,16 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     assert_eq!(json["holdout_ids"], serde_json::json!([]));
     assert_eq!(json["calibration_ids"].as_array().unwrap().len(), observed_runs(d));
     assert!(json["final"]["calibration"]["runout_mae_m"].is_f64() && json["final"]["holdout"]["runs"] == 0);
+    // A k-fold study into that folder leaves one study there: the split's files go, a user's file stays.
+    std::fs::write(all.join("notes.md"), "mine").unwrap();
+    let o = run(&["--kfold", "2", "--out", all.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("files of an earlier calibration"));
+    for gone in ["report.json", "report.md", "runs.csv", "calibrated_profile.toml", "runout_calibration.svg"] {
+        assert!(!all.join(gone).exists(), "{gone}");
+    }
+    assert!(all.join("fold_2/report.json").is_file() && all.join("cv_report.md").is_file());
+    assert!(all.join("notes.md").is_file());
     let o = run(&["--all-runs", "--holdout", d.join("holdout.txt").to_str().unwrap(), "--out", all.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     // An id that is not in the campaign: exit 2, the message names the file and line, no output folder is made.

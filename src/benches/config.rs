@@ -272,10 +272,8 @@ impl StudyConfig {
     /// TOML errors (syntax, unknown keys, wrong types) located as `source:line`.
     pub fn from_toml_str(text: &str, source: &str) -> Result<StudyConfig> {
         toml::from_str(text).map_err(|e| {
-            let line = e.span().map(|sp| text[..sp.start.min(text.len())].matches('\n').count() + 1);
-            let location = line.map_or_else(|| source.to_string(), |l| format!("{source}:{l}"));
             Error::format(
-                location,
+                crate::io::toml_location(text, source, &e),
                 e.message().trim().to_string(),
                 "check the key names and values against the study format (talus::benches::config)",
             )

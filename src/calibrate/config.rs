@@ -131,10 +131,7 @@ pub const STATIC_EXCESS: &str = "static_excess_deg";
 
 /// A parameter as written: a number (fixed), `[min, max]` (free, starting mid-range) or a table.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(
-    untagged,
-    expecting = "a number (fixed), a range [min, max] (free) or a table { min, max, start } (free from start)"
-)]
+#[serde(untagged, try_from = "RawParamSetting")]
 pub enum ParamSetting {
     /// Held at this value.
     Fixed(f64),
@@ -149,6 +146,39 @@ pub enum ParamSetting {
         /// Starting value.
         start: Option<f64>,
     },
+}
+
+/// A parameter setting as written, before its table's keys are checked (a typo such as `strat` must not pass as a
+/// table without a start).
+#[derive(Deserialize)]
+#[serde(
+    untagged,
+    expecting = "a number (fixed), a range [min, max] (free) or a table { min, max, start } (free from start)"
+)]
+enum RawParamSetting {
+    Fixed(f64),
+    Range([f64; 2]),
+    Table(BTreeMap<String, f64>),
+}
+
+impl TryFrom<RawParamSetting> for ParamSetting {
+    type Error = String;
+
+    fn try_from(raw: RawParamSetting) -> std::result::Result<ParamSetting, String> {
+        match raw {
+            RawParamSetting::Fixed(v) => Ok(ParamSetting::Fixed(v)),
+            RawParamSetting::Range(r) => Ok(ParamSetting::Range(r)),
+            RawParamSetting::Table(t) => {
+                if let Some(k) = t.keys().find(|k| !["min", "max", "start"].contains(&k.as_str())) {
+                    return Err(format!("unknown key `{k}` in a parameter table: its keys are `min`, `max` and `start`"));
+                }
+                match (t.get("min"), t.get("max")) {
+                    (Some(&min), Some(&max)) => Ok(ParamSetting::Free { min, max, start: t.get("start").copied() }),
+                    _ => Err("a parameter table needs `min` and `max` (and may give `start`)".into()),
+                }
+            }
+        }
+    }
 }
 
 impl ParamSetting {
@@ -498,13 +528,8 @@ impl CalibrationConfig {
     /// Parses settings from TOML text; `source` names it in errors.
     pub fn from_toml_str(text: &str, source: &str) -> Result<CalibrationConfig> {
         let cfg: CalibrationConfig = toml::from_str(text).map_err(|e| {
-            let line = e.span().map(|s| text[..s.start].lines().count().max(1));
-            let location = match line {
-                Some(l) => format!("{source}:{l}"),
-                None => source.to_string(),
-            };
             Error::format(
-                location,
+                crate::io::toml_location(text, source, &e),
                 e.message().to_string(),
                 "see the calibration settings in docs/calibration.md; keys are case-sensitive",
             )
@@ -528,7 +553,11 @@ impl CalibrationConfig {
             return Err(Error::invalid(
                 f("search_repeats"),
                 format!("must be in [1, repeats = {}], got {}", self.repeats, self.search_repeats),
-                "use for example 4",
+                format!(
+                    "give repeats at least {} (20 or more is advised), or search_repeats at most {}",
+                    self.search_repeats.max(1),
+                    self.repeats
+                ),
             ));
         }
         if !(1..=self.repeats).contains(&self.screen_repeats()) {
@@ -831,6 +860,23 @@ fn check_setting(field: &str, s: &ParamSetting) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Errors name the line of the key at fault, and a parameter table's keys are checked (a typo in `start` was
+    /// read as a table without a start).
+    #[test]
+    fn a_settings_error_names_its_line_and_a_parameter_tables_unknown_key() {
+        let e = |text: &str| CalibrationConfig::from_toml_str(text, "c.toml").unwrap_err().to_string();
+        let err = e("# settings\nseed = 1\nrepeats = 20\n\nrepeets = 20\n");
+        assert!(err.contains("c.toml:5") && err.contains("repeets"), "{err}");
+        let err = e("seed = 1\n[materials.ground]\nrn_mean = { min = 0.1, max = 0.5, strat = 0.2 }\n");
+        assert!(err.contains("c.toml:3") && err.contains("unknown key `strat`") && err.contains("`start`"), "{err}");
+        let err = e("[effects.declared]\nspeed_restitution = { min = 3.0, start = 5.0 }\n");
+        assert!(err.contains("c.toml:2") && err.contains("needs `min` and `max`"), "{err}");
+        let ok = "[materials.ground]\nrn_mean = { min = 0.1, max = 0.5, start = 0.2 }\nrt_mean = [0.5, 0.9]\n";
+        let cfg = CalibrationConfig::from_toml_str(ok, "c.toml").unwrap();
+        assert_eq!(cfg.materials["ground"]["rn_mean"].bounds(), Some((0.1, 0.5, 0.2)));
+        assert_eq!(cfg.materials["ground"]["rt_mean"].bounds(), Some((0.5, 0.9, 0.7)));
+    }
 
     #[test]
     fn the_other_models_tables_are_refused() {

@@ -30,6 +30,7 @@ pub mod model;
 pub mod model2d;
 pub mod model3d;
 pub mod objective;
+pub mod outputs;
 pub mod params;
 pub mod rebound;
 pub mod report;

@@ -59,6 +59,15 @@ pub struct CalibrateArgs {
     kfold_repeats: Option<usize>,
 }
 
+/// Removes what an earlier calibration into the same folder wrote and this one did not, and says so.
+fn remove_earlier(earlier: &calibrate::outputs::EarlierOutputs) -> anyhow::Result<()> {
+    let n = earlier.remove_stale()?;
+    if n > 0 {
+        eprintln!("removed {n} files of an earlier calibration in the output folder that this one did not write again");
+    }
+    Ok(())
+}
+
 pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     super::check_threads_flag(a.threads)?;
     let kind = ModelKind::parse(&a.model)?;
@@ -79,8 +88,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         cfg.threads = t;
     }
     cfg.validate(&source)?;
-    let model = calibrate::open_model(&a.campaign, &a.terrain, kind, &cfg, &source)
-        .with_context(|| format!("reading {}", a.campaign.display()))?;
+    let model = calibrate::open_model(&a.campaign, &a.terrain, kind, &cfg, &source)?;
     let runs = model.runs();
     // Every input is checked before the output folder is made.
     let kfold = a.kfold.map(|k| k.unwrap_or(cfg.outer_folds));
@@ -93,6 +101,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         }
     }
     let held_out = a.holdout.as_ref().map(|p| split::read_holdout(p, runs).map(|h| (p, h))).transpose()?;
+    let earlier = calibrate::outputs::EarlierOutputs::list(&a.out);
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let t0 = Instant::now();
     let log = move |msg: &str| eprintln!("[{:6.1} s] {msg}", t0.elapsed().as_secs_f64());
@@ -114,6 +123,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
                 say!("  {} {:.2} ± {:.2}", m.metric, m.mean, m.sd);
             }
             print_parameter_spread(&r.parameters);
+            remove_earlier(&earlier)?;
             print_fold_maps(&r.model, &a.out, false);
             say!("wrote {}", a.out.join("cv_repeats.md").display());
             return Ok(());
@@ -123,6 +133,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         say!("outer {k}-fold cross-validation over {} runs in {:.0} s", b.runs, cv.total_s);
         print_errors("held-out", b, f);
         print_parameter_spread(&cv.parameters);
+        remove_earlier(&earlier)?;
         print_fold_maps(&cv.model, &a.out, true);
         say!("wrote {}", a.out.join("cv_report.md").display());
         return Ok(());
@@ -155,6 +166,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         eprintln!("{note}: {}", ids.join(" "));
     }
     let c = calibrate::calibrate(model.as_ref(), &cfg, &cal, &hold, &note, Some(&a.out), &log)?;
+    remove_earlier(&earlier)?;
     let r = &c.report;
     say!(
         "{} calibration runs, {} held out; {} simulations in {:.0} s",

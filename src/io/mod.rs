@@ -28,3 +28,11 @@ pub struct MeshData {
     /// Material names (OBJ `usemtl` names; `""` when absent).
     pub material_names: Vec<String>,
 }
+
+/// Where a TOML error lies: `source:line` (1-based, the line of the error's span), or `source` without a span.
+pub fn toml_location(text: &str, source: &str, e: &toml::de::Error) -> String {
+    match e.span() {
+        Some(span) => format!("{source}:{}", text[..span.start.min(text.len())].matches('\n').count() + 1),
+        None => source.to_string(),
+    }
+}

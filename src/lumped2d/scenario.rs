@@ -207,10 +207,8 @@ impl ProfileScenario {
     /// TOML errors (syntax, unknown keys, wrong types) located as `source:line`.
     pub fn from_toml_str(text: &str, source: &str) -> Result<ProfileScenario> {
         let mut s: ProfileScenario = toml::from_str(text).map_err(|e| {
-            let line = e.span().map(|sp| text[..sp.start.min(text.len())].matches('\n').count() + 1);
-            let location = line.map_or_else(|| source.to_string(), |l| format!("{source}:{l}"));
             Error::format(
-                location,
+                crate::io::toml_location(text, source, &e),
                 e.message().trim().to_string(),
                 "check the key names and values against the profile scenario format (talus::lumped2d::scenario)",
             )
