@@ -22,7 +22,18 @@ pub struct Release {
     pub spin_radps: [f64; 3],
     /// Block id.
     pub block_id: String,
+    /// 1-based line of `release_points.csv` the release was read from, for error messages.
+    pub line: usize,
 }
+
+/// How far below the ground a release's centre may lie before the campaign is refused, m (ours): a measured
+/// centre sits a few decimetres off a gridded terrain (at Tschamut up to 0.41 m below the 5 m proxy); metres
+/// below it is a wrong datum, a wrong column or a typo.
+pub const RELEASE_BELOW_GROUND_M: f64 = 1.0;
+
+/// Release height above the ground under it past which a campaign gets a warning, m (ours): field releases are
+/// a few metres up (drops from a crane or a helicopter some tens); hundreds of metres is more likely a typo.
+pub const RELEASE_ABOVE_GROUND_NOTE_M: f64 = 100.0;
 
 /// One observed rest point.
 #[derive(Debug, Clone, PartialEq)]
@@ -161,6 +172,69 @@ impl Campaign {
         }
     }
 
+    /// A note naming the releases without a rest point in `observed_deposition.csv` (runs not observed to stop,
+    /// which calibration leaves out), if any.
+    pub fn unobserved_note(&self) -> Option<String> {
+        let ids: Vec<&str> = self
+            .releases
+            .iter()
+            .filter(|r| !self.depositions.contains_key(&r.trajectory_id))
+            .map(|r| r.trajectory_id.as_str())
+            .collect();
+        (!ids.is_empty()).then(|| {
+            let shown = ids.iter().take(10).copied().collect::<Vec<_>>().join(", ");
+            let more = if ids.len() > 10 { format!(" and {} more", ids.len() - 10) } else { String::new() };
+            format!(
+                "{} of {} releases have no rest point in observed_deposition.csv and are left out (not observed to \
+                 stop; if they ran off the surveyed ground, the campaign lacks its longest runs): {shown}{more}",
+                ids.len(),
+                self.releases.len()
+            )
+        })
+    }
+
+    /// Checks that every release lies over the ground and no more than [`RELEASE_BELOW_GROUND_M`] below it;
+    /// `height_m` gives a point's height above the ground under it (`None` off the ground), `ground` names the
+    /// ground as [`Campaign::check_rest_points`] does. Returns a note naming the releases more than
+    /// [`RELEASE_ABOVE_GROUND_NOTE_M`] above the ground, if any.
+    ///
+    /// # Errors
+    /// The first such release in file order, at its line of `release_points.csv`, naming the run and the point.
+    pub fn check_release_points(
+        &self,
+        height_m: impl Fn([f64; 3]) -> Option<f64>,
+        ground: &str,
+    ) -> Result<Option<String>> {
+        let mut high = Vec::new();
+        for r in &self.releases {
+            let at = |message: String, hint: &str| {
+                Err(Error::at_line(self.dir.join("release_points.csv"), r.line, message, hint))
+            };
+            let point = format!("the release point {:?} of run '{}'", r.position_m, r.trajectory_id);
+            match height_m(r.position_m) {
+                None => return at(format!("{point} is not over {ground}"), "check that the campaign and the terrain (or profile) share a frame, and the point's coordinates"),
+                Some(h) if h < -RELEASE_BELOW_GROUND_M => {
+                    return at(
+                        format!("{point} lies {:.2} m below the ground under it", -h),
+                        "check z_m (the rock's centre, in the terrain's vertical datum) and that the columns are in order",
+                    )
+                }
+                Some(h) if h > RELEASE_ABOVE_GROUND_NOTE_M => {
+                    high.push(format!("{} ({h:.0} m, line {})", r.trajectory_id, r.line))
+                }
+                Some(_) => {}
+            }
+        }
+        Ok((!high.is_empty()).then(|| {
+            format!(
+                "{} releases lie more than {RELEASE_ABOVE_GROUND_NOTE_M} m above the ground under them: {}; check \
+                 their z_m in release_points.csv",
+                high.len(),
+                high.join(", ")
+            )
+        }))
+    }
+
     /// The rock body of a block. The shape is the block's own if given; otherwise inferred from its sizes (our
     /// rule): sorted sizes a ≥ b ≥ c give a `flat_box` when c/a < 0.5 and a `cube`-family box otherwise, in both
     /// cases a box with the block's dimensions and exact mass.
@@ -266,6 +340,7 @@ fn read_releases(rel: &Table, ground: Ground) -> Result<Vec<Release>> {
             ],
             spin_radps: [spin("wx_radps")?, spin("wy_radps")?, spin("wz_radps")?],
             block_id: rel.text(row, b, "block_id")?.to_string(),
+            line: row.line,
         });
     }
     if releases.is_empty() {

@@ -998,7 +998,7 @@ fn a_3drb_calibration_warns_of_what_its_terrain_does_not_use() {
     cfg.back_analysis.enabled = false;
     let model = tschamut_with(&cfg);
     let note = "terrain.material_names.scree is not used";
-    assert!(model.terrain_notes().iter().any(|n| n.starts_with(note)), "{:?}", model.terrain_notes());
+    assert!(model.input_notes().iter().any(|n| n.starts_with(note)), "{:?}", model.input_notes());
     let (cal, hold) = split::seeded_split(model.runs(), 0.25, 1);
     let (cal, hold) = (&cal[..12], &hold[..4]);
     let dir = tempfile::tempdir().unwrap();

@@ -315,7 +315,7 @@ pub fn calibrate(
         split: split.into(),
         release_groups,
         duplicate_runs: runs::duplicate_runs(runs),
-        warnings: model.terrain_notes().to_vec(),
+        warnings: model.input_notes().to_vec(),
         runs_not_started: not_started,
         runs_stalling: stalling,
         baseline: report::Stage::new(

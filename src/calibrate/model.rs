@@ -214,11 +214,10 @@ pub trait Model: Sync {
     fn reads_bounces(&self) -> bool {
         self.reading().bounce_reads
     }
-    /// What building the model's terrain noticed ([`crate::terrain::Terrain::notes`]: keys it does not use, area
-    /// closed over); none by default.
-    fn terrain_notes(&self) -> &[String] {
-        &[]
-    }
+    /// What reading the inputs noticed: releases without a rest point ([`crate::campaign::Campaign::unobserved_note`])
+    /// and, in 3DRB, the terrain's notes ([`crate::terrain::Terrain::notes`]: keys it does not use, area closed
+    /// over).
+    fn input_notes(&self) -> &[String];
     /// The material parameters the tracks of runs `which` measure directly ([`super::measured`]); none by default.
     fn measured_by_tracks(&self, _which: &[usize]) -> Vec<super::measured::Measured> {
         Vec::new()

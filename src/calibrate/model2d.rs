@@ -32,11 +32,14 @@ pub struct Model2d {
     reading: Reading,
     /// The campaign folder and the profile file, for [`Model::scenario_files`] (`None` when built from parts).
     files: Option<(PathBuf, PathBuf)>,
+    /// [`Model::input_notes`].
+    notes: Vec<String>,
 }
 
 impl Model2d {
-    /// Reads the profile and binds the runs of `campaign` to it; a rest point outside the profile's x range is
-    /// refused ([`Campaign::check_rest_points`]).
+    /// Reads the profile and binds the runs of `campaign` to it; a release off the profile or more than a metre
+    /// below it, and a rest point outside its x range, are refused ([`Campaign::check_release_points`],
+    /// [`Campaign::check_rest_points`]).
     pub fn new(
         campaign: &Campaign,
         runs: Vec<FieldRun>,
@@ -45,13 +48,15 @@ impl Model2d {
         cfg: &CalibrationConfig,
     ) -> Result<Model2d> {
         let profile = Profile::from_csv_path(profile_file)?;
+        let (x0, x1) = profile.x_range_m();
+        let ground = format!("the profile, whose x range is [{x0}, {x1}]");
+        let high = campaign.check_release_points(|p| profile.z_at(p[0]).map(|z| p[2] - z), &ground)?;
         let mut model = Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
             .with_release_attempts(cfg.release_attempts)
             .with_rest_noise(cfg.rest_noise_m);
-        let (x0, x1) = model.profile.x_range_m();
-        campaign
-            .check_rest_points(|p| (x0..=x1).contains(&p[0]), &format!("the profile, whose x range is [{x0}, {x1}]"))?;
+        campaign.check_rest_points(|p| (x0..=x1).contains(&p[0]), &ground)?;
         model.files = Some((campaign.dir.clone(), profile_file.to_path_buf()));
+        model.notes.extend(campaign.unobserved_note().into_iter().chain(high));
         Ok(model.with_tracks(&campaign.tracks, cfg.track_noise_m)?.with_bounce_reads(cfg.bounce_weight != Some(0.0)))
     }
 
@@ -81,7 +86,7 @@ impl Model2d {
         }
         let materials = profile.material_names().to_vec();
         let reading = Reading::for_runs(&runs);
-        Ok(Model2d { runs, group_names, profile, materials, options, reading, files: None })
+        Ok(Model2d { runs, group_names, profile, materials, options, reading, files: None, notes: Vec::new() })
     }
 
     /// The model measuring every simulated path's rebound height, or not (by default: if a run is tracked).
@@ -216,6 +221,10 @@ impl Model for Model2d {
 
     fn reading(&self) -> &Reading {
         &self.reading
+    }
+
+    fn input_notes(&self) -> &[String] {
+        &self.notes
     }
 
     fn release_height_m(&self, run: &FieldRun) -> f64 {

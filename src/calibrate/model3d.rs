@@ -37,6 +37,8 @@ pub struct Model3d {
     reading: Reading,
     /// The campaign folder and the terrain as read, for [`Model::scenario_toml`] (`None` when built from parts).
     files: Option<(std::path::PathBuf, TerrainSpec)>,
+    /// [`Model::input_notes`].
+    notes: Vec<String>,
 }
 
 /// The terrain as messages name it: `the terrain, which spans x [a, b] and y [c, d]`, its horizontal extent in the
@@ -54,7 +56,8 @@ fn terrain_extent(terrain: &Terrain) -> String {
 
 impl Model3d {
     /// Reads the terrain file and builds the blocks of `campaign` for its `runs`. `source` names the settings
-    /// file in errors. A rest point not over the terrain is refused ([`Campaign::check_rest_points`]).
+    /// file in errors. A release not over the terrain or more than a metre below it, and a rest point not over it,
+    /// are refused ([`Campaign::check_release_points`], [`Campaign::check_rest_points`]).
     pub fn new(
         campaign: &Campaign,
         runs: Vec<FieldRun>,
@@ -119,14 +122,23 @@ impl Model3d {
             .with_release_attempts(cfg.release_attempts)
             .with_rest_noise(cfg.rest_noise_m);
         let terrain = &model.terrain;
+        let ground = terrain_extent(terrain);
+        let high = campaign.check_release_points(
+            |p| {
+                let q = to_local(terrain, p);
+                terrain.surface.height(q.x, q.y).map(|z| q.z - z)
+            },
+            &ground,
+        )?;
         campaign.check_rest_points(
             |p| {
                 let q = to_local(terrain, p);
                 terrain.surface.at(q.x, q.y).is_some()
             },
-            &terrain_extent(terrain),
+            &ground,
         )?;
         model.files = Some((campaign.dir.clone(), spec));
+        model.notes.extend(campaign.unobserved_note().into_iter().chain(high));
         Ok(model
             .with_tracks(&campaign.tracks, cfg.track_noise_m)?
             .with_bounce_reads(cfg.bounce_weight.is_some_and(|w| w > 0.0)))
@@ -172,7 +184,20 @@ impl Model3d {
         masses.sort_by(|a, b| a.total_cmp(b));
         let median_mass_kg = masses.get(masses.len() / 2).copied().unwrap_or(100.0);
         let reading = Reading::for_runs(&runs);
-        Ok(Model3d { runs, group_names, materials, terrain, bodies, sim, dem, median_mass_kg, reading, files: None })
+        let notes = terrain.notes.clone();
+        Ok(Model3d {
+            runs,
+            group_names,
+            materials,
+            terrain,
+            bodies,
+            sim,
+            dem,
+            median_mass_kg,
+            reading,
+            files: None,
+            notes,
+        })
     }
 
     /// The model with the tracked paths `tracks` (by run id, in the campaign's frame) attached: each tracked run gets
@@ -296,8 +321,8 @@ impl Model for Model3d {
         self.materials[best].clone()
     }
 
-    fn terrain_notes(&self) -> &[String] {
-        &self.terrain.notes
+    fn input_notes(&self) -> &[String] {
+        &self.notes
     }
 
     fn map_frame(&self) -> MapFrame {

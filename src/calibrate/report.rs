@@ -99,7 +99,7 @@ pub struct Report {
     /// Pairs of runs that are the same record ([`super::runs::duplicate_runs`]).
     #[serde(default)]
     pub duplicate_runs: Vec<[String; 2]>,
-    /// What building the terrain noticed ([`super::Model::terrain_notes`]), as `talus run` warns.
+    /// What reading the inputs noticed ([`super::Model::input_notes`]), as `talus run` warns.
     #[serde(default)]
     pub warnings: Vec<String>,
     /// Runs whose baseline simulations all end at their release while the field rock ran

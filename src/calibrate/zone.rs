@@ -298,6 +298,9 @@ impl Model for NullModel<'_> {
     fn reading(&self) -> &super::model::Reading {
         self.inner.reading()
     }
+    fn input_notes(&self) -> &[String] {
+        self.inner.input_notes()
+    }
     fn prepare<'a>(
         &'a self,
         candidate: &super::params::Candidate,

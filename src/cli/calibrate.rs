@@ -105,7 +105,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     let t0 = Instant::now();
     let log = move |msg: &str| eprintln!("[{:6.1} s] {msg}", t0.elapsed().as_secs_f64());
-    for note in model.terrain_notes() {
+    for note in model.input_notes() {
         eprintln!("warning: {note}");
     }
     for [a, b] in calibrate::runs::duplicate_runs(runs) {
