@@ -97,7 +97,7 @@ pub enum Ground {
 }
 
 /// Hint for a missing campaign column.
-const COLUMN_HINT: &str = "add the column (see the campaign format in README.md)";
+const COLUMN_HINT: &str = "add the column (see the campaign format in docs/campaign.md)";
 
 /// Hint for a missing velocity column.
 const VELOCITY_HINT: &str = "add the column: the initial velocity in m/s, 0 for a block dropped at rest";

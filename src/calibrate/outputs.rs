@@ -14,9 +14,10 @@ const REPORTS: [&str; 3] = ["report.json", "cv_report.json", "cv_repeats.json"];
 
 /// Whether `name` is a file a calibration writes: reports, run tables, charts, maps and the calibrated model.
 fn is_output_file(name: &str) -> bool {
-    const FILES: [&str; 9] = [
+    const FILES: [&str; 10] = [
         "report.md",
         "runs.csv",
+        "impacts.csv",
         "cv_report.md",
         "cv_repeats.md",
         "calibrated.toml",
