@@ -682,12 +682,13 @@ fn an_envelope_of_profile_models_combines_their_envelopes_station_by_station() {
     assert!(svg.contains("models, max") && svg.contains("seeds alone, min"));
     assert!(out.join("floor/bounce_p95_m.svg").exists(), "the floor's envelope.md shows its charts too");
 
-    // Another station spacing: refused, naming the model and the key.
+    // Another station spacing: refused before anything runs, naming the model and the key; nothing written.
     std::fs::write(&paths[1], text.replacen("envelope_spacing_m = 1.0", "envelope_spacing_m = 2.0", 1)).unwrap();
     let o = envelope(&[&paths[0], &paths[1]], &dir.path().join("bad"), &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("b: envelopes") && err.contains("envelope_spacing_m"), "{err}");
+    assert!(err.contains("b: profile") && err.contains("envelope_spacing_m"), "{err}");
+    assert!(!dir.path().join("bad").exists(), "{err}");
 }
 
 #[test]

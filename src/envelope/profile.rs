@@ -126,6 +126,7 @@ pub fn run_profile_envelope(
             "give two or more profile scenarios, e.g. every fold_*/calibrated_profile.toml of `talus calibrate --kfold`",
         ));
     }
+    check_profiles_before(scenarios)?;
     let members: Vec<(&ProfileScenario, String, u64)> = scenarios.iter().map(|(s, n)| (s, n.clone(), seed)).collect();
     let mut summary = profile_envelope_of(&members, out_dir)?;
     if floor {
@@ -141,6 +142,35 @@ pub fn run_profile_envelope(
     write_charts(out_dir, floor)?;
     write_profile_summary(out_dir, &summary)?;
     Ok(summary)
+}
+
+/// Checks, before anything runs or is written, that the scenarios share what makes their envelopes' stations and
+/// columns: the profile's geometry (its materials may differ, as fold models' zones do), `envelope_spacing_m` and
+/// `collectors_x_m`.
+///
+/// # Errors
+/// A scenario does not resolve, or differs from the first in one of these.
+fn check_profiles_before(scenarios: &[(ProfileScenario, String)]) -> Result<()> {
+    let key = |sc: &ProfileScenario| -> Result<Vec<u64>> {
+        let resolved = sc.resolve()?;
+        let p = resolved.slope.profile();
+        let vertices = (0..=p.n_segments()).flat_map(|i| p.vertex(i));
+        let spacing = std::iter::once(sc.envelope_spacing_m);
+        Ok(vertices.chain(spacing).chain(sc.collectors_x_m.iter().copied()).map(f64::to_bits).collect())
+    };
+    let (first, first_name) = &scenarios[0];
+    let first_key = key(first)?;
+    for (sc, name) in &scenarios[1..] {
+        if key(sc)? != first_key {
+            return Err(Error::invalid(
+                format!("{name}: profile"),
+                format!("its profile, envelope_spacing_m or collectors_x_m differ from {first_name}'s"),
+                "an envelope combines models of one profile: give every scenario the same profile, \
+                 envelope_spacing_m and collectors_x_m",
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The charts of `envelope.md`: bounce height and kinetic energy P95 along the profile, lowest, median and highest
