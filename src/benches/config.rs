@@ -274,8 +274,8 @@ impl StudyConfig {
         toml::from_str(text).map_err(|e| {
             Error::format(
                 crate::io::toml_location(text, source, &e),
-                e.message().trim().to_string(),
-                "check the key names and values against the study format (talus::benches::config)",
+                crate::io::toml_message(&e),
+                "check the key names and values against the study format (README, \"The bench design study\"; examples/benches_quick.toml)",
             )
         })
     }

@@ -530,7 +530,7 @@ impl CalibrationConfig {
         let cfg: CalibrationConfig = toml::from_str(text).map_err(|e| {
             Error::format(
                 crate::io::toml_location(text, source, &e),
-                e.message().to_string(),
+                crate::io::toml_message(&e),
                 "see the calibration settings in docs/calibration.md; keys are case-sensitive",
             )
         })?;
@@ -866,6 +866,8 @@ mod tests {
     #[test]
     fn a_settings_error_names_its_line_and_a_parameter_tables_unknown_key() {
         let e = |text: &str| CalibrationConfig::from_toml_str(text, "c.toml").unwrap_err().to_string();
+        let err = e("# settings\nseed = 1\nrepeats = \"x\"\n");
+        assert!(err.contains("c.toml:3") && err.contains("expected a whole number of 0 or more"), "{err}");
         let err = e("# settings\nseed = 1\nrepeats = 20\n\nrepeets = 20\n");
         assert!(err.contains("c.toml:5") && err.contains("repeets"), "{err}");
         let err = e("seed = 1\n[materials.ground]\nrn_mean = { min = 0.1, max = 0.5, strat = 0.2 }\n");

@@ -214,8 +214,9 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
 
 /// The fitted parameters that move across the folds, as mean ± sd (fixed ones are left out).
 fn print_parameter_spread(spread: &[calibrate::crossval::ParameterSpread]) {
+    // Moving: not the same value in every fold (a fixed parameter's mean can carry a rounding sd of 1e-17).
     let moving: Vec<String> =
-        spread.iter().filter(|p| p.sd > 0.0).map(|p| format!("{} {:.3} ± {:.3}", p.name, p.mean, p.sd)).collect();
+        spread.iter().filter(|p| p.max > p.min).map(|p| format!("{} {:.3} ± {:.3}", p.name, p.mean, p.sd)).collect();
     if !moving.is_empty() {
         say!("fitted across the folds, mean ± sd: {}", moving.join(", "));
     }

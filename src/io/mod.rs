@@ -29,6 +29,23 @@ pub struct MeshData {
     pub material_names: Vec<String>,
 }
 
+/// A TOML error's message in a user's words: serde's Rust type names (`expected f64`, `expected usize`) as what
+/// the value should be.
+pub fn toml_message(e: &toml::de::Error) -> String {
+    let mut m = e.message().trim().to_string();
+    for (rust, words) in [
+        ("f64", "a number"),
+        ("usize", "a whole number of 0 or more"),
+        ("u64", "a whole number of 0 or more"),
+        ("u32", "a whole number of 0 or more"),
+        ("i64", "a whole number"),
+        ("bool", "true or false"),
+    ] {
+        m = m.replace(&format!("expected {rust}"), &format!("expected {words}"));
+    }
+    m
+}
+
 /// Where a TOML error lies: `source:line` (1-based, the line of the error's span), or `source` without a span.
 pub fn toml_location(text: &str, source: &str, e: &toml::de::Error) -> String {
     match e.span() {

@@ -209,8 +209,8 @@ impl ProfileScenario {
         let mut s: ProfileScenario = toml::from_str(text).map_err(|e| {
             Error::format(
                 crate::io::toml_location(text, source, &e),
-                e.message().trim().to_string(),
-                "check the key names and values against the profile scenario format (talus::lumped2d::scenario)",
+                crate::io::toml_message(&e),
+                "check the key names and values against the profile scenario format (README, \"Other commands\": talus profile; examples/profile_bench.toml)",
             )
         })?;
         s.source = Some(source.to_string());
