@@ -212,13 +212,14 @@ impl Campaign {
             };
             let point = format!("the release point {:?} of run '{}'", r.position_m, r.trajectory_id);
             match height_m(r.position_m) {
-                None => return at(format!("{point} is not over {ground}"), "check that the campaign and the terrain (or profile) share a frame, and the point's coordinates"),
-                Some(h) if h < -RELEASE_BELOW_GROUND_M => {
-                    return at(
-                        format!("{point} lies {:.2} m below the ground under it", -h),
-                        "check z_m (the rock's centre, in the terrain's vertical datum) and that the columns are in order",
-                    )
-                }
+                None => return at(
+                    format!("{point} is not over {ground}"),
+                    "check that the campaign and the terrain (or profile) share a frame, and the point's coordinates",
+                ),
+                Some(h) if h < -RELEASE_BELOW_GROUND_M => return at(
+                    format!("{point} lies {:.2} m below the ground under it", -h),
+                    "check z_m (the rock's centre, in the terrain's vertical datum) and that the columns are in order",
+                ),
                 Some(h) if h > RELEASE_ABOVE_GROUND_NOTE_M => {
                     high.push(format!("{} ({h:.0} m, line {})", r.trajectory_id, r.line))
                 }

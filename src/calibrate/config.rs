@@ -170,7 +170,9 @@ impl TryFrom<RawParamSetting> for ParamSetting {
             RawParamSetting::Range(r) => Ok(ParamSetting::Range(r)),
             RawParamSetting::Table(t) => {
                 if let Some(k) = t.keys().find(|k| !["min", "max", "start"].contains(&k.as_str())) {
-                    return Err(format!("unknown key `{k}` in a parameter table: its keys are `min`, `max` and `start`"));
+                    return Err(format!(
+                        "unknown key `{k}` in a parameter table: its keys are `min`, `max` and `start`"
+                    ));
                 }
                 match (t.get("min"), t.get("max")) {
                     (Some(&min), Some(&max)) => Ok(ParamSetting::Free { min, max, start: t.get("start").copied() }),

@@ -26,9 +26,8 @@ fn is_output_file(name: &str) -> bool {
         "deposition_excess.tif",
         "deposition_excess.png",
     ];
-    let named = |prefix: &str, extensions: &[&str]| {
-        name.starts_with(prefix) && extensions.iter().any(|e| name.ends_with(e))
-    };
+    let named =
+        |prefix: &str, extensions: &[&str]| name.starts_with(prefix) && extensions.iter().any(|e| name.ends_with(e));
     REPORTS.contains(&name)
         || FILES.contains(&name)
         || named("residual_vs_", &[".svg"])
