@@ -224,24 +224,27 @@ pub fn quantile_sorted(sorted: &[f64], q: f64) -> f64 {
 }
 
 /// Loads the terrain of a scenario, with its barriers.
+///
+/// # Errors
+/// Beside the terrain's own: a barrier with no point of its line over the terrain (coordinates in another frame,
+/// most likely: it would catch nothing, and say so as if no rock came), as collectors are refused.
 pub fn load_terrain(sc: &Scenario) -> Result<Terrain> {
     let mut terrain = build_terrain(&sc.terrain_files, &sc.file.terrain, &sc.materials, &sc.path)?;
-    terrain.barriers = sc
-        .file
-        .barriers
-        .iter()
-        .enumerate()
-        .map(|(i, b)| crate::sim::Barrier {
-            name: b.name.clone().unwrap_or_else(|| format!("barrier_{i}")),
-            line_m: b
-                .line
-                .iter()
-                .map(|p| crate::terrain::horizontal_to_local(terrain.up, &terrain.origin, *p))
-                .collect(),
-            height_m: b.height_m,
-            capacity_j: b.capacity_kj * 1000.0,
-        })
-        .collect();
+    let mut barriers = Vec::new();
+    for (i, b) in sc.file.barriers.iter().enumerate() {
+        let name = b.name.clone().unwrap_or_else(|| format!("barrier_{i}"));
+        let line_m: Vec<[f64; 2]> =
+            b.line.iter().map(|p| crate::terrain::horizontal_to_local(terrain.up, &terrain.origin, *p)).collect();
+        if !terrain.surface.any_point_over(&line_m) {
+            return Err(Error::invalid(
+                format!("{}: barriers[{i}] ({name})", sc.path.display()),
+                "no point of the line lies over the terrain",
+                "give the line in the terrain's coordinates (the CRS of the DEM, or the mesh's x and y)",
+            ));
+        }
+        barriers.push(crate::sim::Barrier { name, line_m, height_m: b.height_m, capacity_j: b.capacity_kj * 1000.0 });
+    }
+    terrain.barriers = barriers;
     Ok(terrain)
 }
 

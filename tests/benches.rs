@@ -309,6 +309,11 @@ fn cli_benches_names_a_bad_config_key() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("face_angles_deg[1]"));
     assert!(!dir.path().join("x").exists());
+    // An --out that is a file is refused before the study runs (it ran the whole study first).
+    std::fs::write(dir.path().join("a_file"), "x").unwrap();
+    let out = talus(&["benches", "--out", "a_file"], dir.path());
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--out: a_file is a file"));
 }
 
 #[test]

@@ -392,6 +392,12 @@ fn bad_input_is_answered_with_where_what_and_how() {
     fails_cleanly(d, &scenario(d, off, 0.3, "300.0"), &["collectors[0] (c)", "no point of the line"]);
     let on = "[[collectors]]\nname = \"c\"\nline = [[500044.0, 5000000.0], [500044.0, 5000040.0]]\n";
     fails_cleanly(d, &scenario(d, &format!("{on}{on}"), 0.3, "300.0"), &["collectors[1] (c)", "another collector"]);
+    // A barrier line off the terrain likewise (it ran, catching nothing), its scenario named once.
+    let barrier = "[[barriers]]\nname = \"b\"\nline = [[0.0, 0.0], [10.0, 0.0]]\nheight_m = 3.0\ncapacity_kj = 500.0\n";
+    let sc = scenario(d, barrier, 0.3, "300.0");
+    fails_cleanly(d, &sc, &["barriers[0] (b)", "no point of the line"]);
+    let o = talus().args(["run", sc.to_str().unwrap(), "--out", d.join("out_bad").to_str().unwrap()]).output().unwrap();
+    assert_eq!(String::from_utf8_lossy(&o.stderr).matches("scenario.toml").count(), 1);
     // An EPSG code no GeoTIFF can hold: refused with the scenario, before a rock runs or a file is written.
     let sc = scenario(d, "", 0.3, "300.0");
     std::fs::write(&sc, std::fs::read_to_string(&sc).unwrap().replace("crs_epsg = 2056", "crs_epsg = 999999")).unwrap();

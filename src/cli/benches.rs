@@ -101,6 +101,7 @@ pub fn run(a: BenchesArgs) -> anyhow::Result<()> {
     if let Some(v) = a.threads {
         c.threads = v;
     }
+    super::check_out_folder("--out", &a.out)?;
     let bar: RefCell<Option<(Model, ProgressBar)>> = RefCell::new(None);
     let progress = |model: Model, done: usize, total: usize| {
         let mut b = bar.borrow_mut();

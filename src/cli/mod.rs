@@ -112,6 +112,17 @@ pub fn read_profile(path: &std::path::Path, command: &str) -> anyhow::Result<tal
     })
 }
 
+/// An error of running `scenario`, prefixed "running SCENARIO" unless its message names the file already (it
+/// printed the path twice).
+pub fn running(scenario: &std::path::Path, e: talus::Error) -> anyhow::Error {
+    let name = scenario.display().to_string();
+    if e.to_string().contains(&name) {
+        e.into()
+    } else {
+        anyhow::Error::from(e).context(format!("running {name}"))
+    }
+}
+
 /// Refuses `--threads 0` and more than [`talus::parallel::MAX_THREADS`].
 pub fn check_threads_flag(threads: Option<usize>) -> anyhow::Result<()> {
     match threads {
@@ -133,6 +144,19 @@ pub fn check_out_file(
     refuse_folder(flag, out)?;
     refuse_input(flag, out, inputs)?;
     extension.map_or(Ok(()), |e| require_extension(flag, out, e))
+}
+
+/// Refuses an output folder path (`flag`, e.g. `--out`) that is an existing file or lies under one, before any
+/// work (a command that makes its folder only when it writes found out after its run).
+pub fn check_out_folder(flag: &str, out: &std::path::Path) -> anyhow::Result<()> {
+    if let Some(file) = out.ancestors().find(|p| p.is_file()) {
+        anyhow::bail!(
+            "{flag}: {} is a file
+  how to fix: {flag} names a folder to write into: give a new or existing folder",
+            file.display()
+        );
+    }
+    Ok(())
 }
 
 /// Refuses `out` if it is an existing folder.

@@ -1,6 +1,5 @@
 //! `talus profile`.
 
-use anyhow::Context;
 use clap::Args;
 use std::path::PathBuf;
 use talus::lumped2d::run_profile;
@@ -37,7 +36,7 @@ pub fn run(a: ProfileArgs) -> anyhow::Result<()> {
         scenario.seed = s;
     }
     let summary = super::with_threads(a.control.threads, || {
-        run_profile(&scenario, &a.out).with_context(|| format!("running {}", a.scenario.display()))
+        run_profile(&scenario, &a.out).map_err(|e| super::running(&a.scenario, e))
     })?;
     let s = summary.stop_reasons;
     say!(

@@ -1,7 +1,6 @@
 //! `talus run`.
 
 use super::progress;
-use anyhow::Context;
 use clap::Args;
 use std::path::PathBuf;
 use talus::run::{run_setup, RunExtras};
@@ -53,14 +52,13 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
         }
         pb.set_position(done as u64);
     };
-    let context = || format!("running {}", a.scenario.display());
     // The terrain's notes (a material no triangle has, a terrain closed over) come before the rocks run.
-    let setup = talus::run::setup(&sc, &overrides).with_context(context)?;
+    let setup = talus::run::setup(&sc, &overrides).map_err(|e| super::running(&a.scenario, e))?;
     for w in &setup.terrain.notes {
         pb.suspend(|| eprintln!("warning: {w}"));
     }
     let summary = run_setup(&sc, setup, &overrides, &a.out, &progress, &RunExtras::default(), &mut |_, _| {})
-        .with_context(context)?
+        .map_err(|e| super::running(&a.scenario, e))?
         .summary;
     pb.finish_and_clear();
     let reason = |r: &str| summary.stop_reasons.get(r).copied().unwrap_or(0);
