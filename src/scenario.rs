@@ -458,6 +458,18 @@ impl ScenarioFile {
                 "set materials_by to group, material, file or slope, or name the material 'default'",
             ));
         }
+        for (i, m) in self.simulation.params.effects.soft_materials.iter().enumerate() {
+            if !known(m) {
+                return Err(Error::invalid(
+                    f(&format!("simulation.effects.soft_materials[{i}]")),
+                    format!("'{m}' is not defined (the soft-ground drag would apply nowhere)"),
+                    format!(
+                        "use one of: {} (or leave soft_materials out: the drag then applies on every material)",
+                        self.materials.keys().cloned().collect::<Vec<_>>().join(", ")
+                    ),
+                ));
+            }
+        }
         for (i, z) in self.terrain.zones.iter().enumerate() {
             if !known(&z.material) {
                 return Err(Error::invalid(

@@ -392,6 +392,12 @@ fn bad_input_is_answered_with_where_what_and_how() {
     fails_cleanly(d, &scenario(d, off, 0.3, "300.0"), &["collectors[0] (c)", "no point of the line"]);
     let on = "[[collectors]]\nname = \"c\"\nline = [[500044.0, 5000000.0], [500044.0, 5000040.0]]\n";
     fails_cleanly(d, &scenario(d, &format!("{on}{on}"), 0.3, "300.0"), &["collectors[1] (c)", "another collector"]);
+    // Soft ground on a material the scenario does not define (the drag applied nowhere, without a word).
+    let sc = scenario(d, "", 0.3, "300.0");
+    let text = std::fs::read_to_string(&sc).unwrap();
+    let soft = "seed = 3\n[simulation.effects]\nsoft_drag_per_s = 1.0\nsoft_materials = [\"mud\"]";
+    std::fs::write(&sc, text.replace("seed = 3", soft)).unwrap();
+    fails_cleanly(d, &sc, &["simulation.effects.soft_materials[0]", "'mud' is not defined", "default"]);
     // A barrier line off the terrain likewise (it ran, catching nothing), its scenario named once.
     let barrier = "[[barriers]]\nname = \"b\"\nline = [[0.0, 0.0], [10.0, 0.0]]\nheight_m = 3.0\ncapacity_kj = 500.0\n";
     let sc = scenario(d, barrier, 0.3, "300.0");
