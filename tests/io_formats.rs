@@ -532,6 +532,12 @@ fn stl_truncated_binary_names_sizes() {
     let err = stl::read_stl(&path).unwrap_err().to_string();
     assert!(err.contains("cut.stl") && err.contains("4 triangles") && err.contains("284 bytes"), "{err}");
     assert!(err.contains("277 bytes"), "{err}");
+    // The same with a header starting with `solid`, as CAD exporters write: still a truncated binary file (it was
+    // read as ASCII, "no facets").
+    b[..11].copy_from_slice(b"solid part ");
+    std::fs::write(&path, &b).unwrap();
+    let err = stl::read_stl(&path).unwrap_err().to_string();
+    assert!(err.contains("4 triangles") && err.contains("277 bytes"), "{err}");
 }
 
 // ---------------------------------------------------------------------------------------------------------------

@@ -2,7 +2,7 @@
 //!
 //! A file is binary when its size is exactly 84 + 50·N bytes, N being the triangle count in its header (even if
 //! the 80-byte header starts with `solid`, as some exporters write). Otherwise it is ASCII if it starts with
-//! `solid`, and a truncated or padded binary file if not.
+//! `solid` and holds no NUL byte, and a truncated or padded binary file if not.
 //!
 //! ASCII files are read line by line by our own parser (structure, numbers, finite vertices; a file that stops
 //! inside a facet is reported with the line where that facet starts; a bare `solid` first line, a missing
@@ -38,7 +38,9 @@ pub fn read_stl(path: &Path) -> Result<MeshData> {
             bytes[..5].copy_from_slice(b"SOLID");
         }
         read_binary(path, bytes)?
-    } else if starts_with_solid(&bytes) {
+    } else if starts_with_solid(&bytes) && !bytes.contains(&0) {
+        // Text never holds a NUL byte; a binary file whose header starts with `solid` does (attribute words,
+        // zeros), so a truncated one falls through to the size message below rather than "no facets".
         read_ascii(path, &String::from_utf8_lossy(&bytes))?
     } else {
         return Err(match binary_count {
