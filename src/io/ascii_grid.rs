@@ -94,7 +94,15 @@ pub fn read_grid(path: &Path) -> Result<Grid> {
     let count = |k: &str| -> Result<usize> {
         let (_, _, text, line) = find(k).ok_or_else(|| missing(k))?;
         text.parse::<usize>().ok().filter(|&n| n > 0).ok_or_else(|| {
-            Error::at_line(path, *line, format!("{k} must be a positive whole number, found '{text}'"), "fix it")
+            Error::at_line(
+                path,
+                *line,
+                format!("{k} must be a positive whole number, found '{text}'"),
+                format!(
+                    "give {k} as the number of {}: a whole number such as 40",
+                    if k == "ncols" { "columns" } else { "rows" }
+                ),
+            )
         })
     };
     let ncols = count("ncols")?;
@@ -141,7 +149,11 @@ pub fn read_grid(path: &Path) -> Result<Grid> {
     let nodata = find("nodata_value").map(|h| h.1);
 
     let n = ncols.checked_mul(nrows).ok_or_else(|| {
-        Error::format(format!("{}: header", path.display()), format!("{ncols} × {nrows} cells is too many"), "fix it")
+        Error::format(
+            format!("{}: header", path.display()),
+            format!("{ncols} × {nrows} cells is too many"),
+            "check ncols and nrows",
+        )
     })?;
     let mut values = Vec::with_capacity(n.min(1 << 28));
     let mut found = 0usize;
