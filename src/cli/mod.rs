@@ -91,8 +91,8 @@ pub fn read_3d(path: &std::path::Path, command: &str) -> anyhow::Result<talus::s
             return e.into();
         }
         anyhow::anyhow!(
-            "{}: a 2DLM profile scenario (it has `profile`), while `talus {command}` takes a 3D scenario (the format \
-             of `talus run`)\n  how to fix: run it with `talus profile`, or give a 3D scenario",
+            "{}: a 2DLM profile scenario (it has `profile`), while `talus {command}` takes a 3D scenario (with \
+             [terrain], as examples/bench_stack.toml)\n  how to fix: run it with `talus profile`, or give a 3D scenario",
             path.display()
         )
     })
