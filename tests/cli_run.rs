@@ -690,6 +690,8 @@ fn an_envelope_of_profile_models_combines_their_envelopes_station_by_station() {
     assert!(line.ends_with(&format!("energy P95 {lo:.1}-{hi:.1} kJ")), "{line}");
     let md = std::fs::read_to_string(out.join("envelope.md")).unwrap();
     assert!(md.contains("seeds alone") && md.contains("(bounce_p95_m.svg)"), "{md}");
+    let row = md.lines().find(|l| l.starts_with("| seeds alone (2 runs of a;")).unwrap_or_else(|| panic!("{md}"));
+    assert!(row.contains(&format!("| {lo:.1}–{hi:.1} |")), "{row}");
     let svg = std::fs::read_to_string(out.join("bounce_p95_m.svg")).unwrap();
     assert!(svg.contains("models, max") && svg.contains("seeds alone, min"));
     assert!(out.join("floor/bounce_p95_m.svg").exists(), "the floor's envelope.md shows its charts too");

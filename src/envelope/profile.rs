@@ -296,6 +296,29 @@ fn write_profile_summary(dir: &Path, s: &ProfileEnvelope) -> Result<()> {
             f(first, 3)
         );
     }
+    if let Some(fl) = &s.floor {
+        // The seeds alone, as ranges over the floor's runs, so that the models' rows can be read against them.
+        let range = |get: &dyn Fn(&ProfileModel) -> Option<f64>, digits: usize| {
+            let v: Vec<f64> = fl.models.iter().filter_map(get).collect();
+            let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
+            if v.is_empty() {
+                "–".to_string()
+            } else {
+                format!("{lo:.digits$}–{hi:.digits$}")
+            }
+        };
+        let first = |m: &ProfileModel| m.bench_fractions.as_ref().and_then(|b| b.get(1).copied());
+        md += &format!(
+            "| seeds alone ({} runs of {}; [floor/envelope.md](floor/envelope.md)) | | | | {} | {} | {} | {} | {} |\n",
+            fl.models.len(),
+            s.models.first().map_or("", |m| m.name.as_str()),
+            range(&|m| m.runout_p50_m, 1),
+            range(&|m| m.runout_p95_m, 1),
+            range(&|m| m.highest_bounce_p95_m, 2),
+            range(&|m| m.highest_kinetic_p95_kj, 1),
+            range(&first, 3)
+        );
+    }
     md += "\n";
     for (column, title, _, _) in CHARTS {
         md += &format!("![{title}]({column}.svg)\n");
