@@ -275,7 +275,8 @@ impl StudyConfig {
             Error::format(
                 crate::io::toml_location(text, source, &e),
                 crate::io::toml_message(&e),
-                "check the key names and values against the study format (README, \"The bench design study\"; examples/benches_quick.toml)",
+                "check the key names and values against the study format (README, \"The bench design study\"; \
+                 examples/benches_quick.toml)",
             )
         })
     }

@@ -92,7 +92,8 @@ pub fn read_3d(path: &std::path::Path, command: &str) -> anyhow::Result<talus::s
         }
         anyhow::anyhow!(
             "{}: a 2DLM profile scenario (it has `profile`), while `talus {command}` takes a 3D scenario (with \
-             [terrain], as examples/bench_stack.toml)\n  how to fix: run it with `talus profile`, or give a 3D scenario",
+             [terrain], as examples/bench_stack.toml)\n  how to fix: run it with `talus profile`, or give a 3D \
+             scenario",
             path.display()
         )
     })
@@ -151,8 +152,7 @@ pub fn check_out_file(
 pub fn check_out_folder(flag: &str, out: &std::path::Path) -> anyhow::Result<()> {
     if let Some(file) = out.ancestors().find(|p| p.is_file()) {
         anyhow::bail!(
-            "{flag}: {} is a file
-  how to fix: {flag} names a folder to write into: give a new or existing folder",
+            "{flag}: {} is a file\n  how to fix: {flag} names a folder to write into: give a new or existing folder",
             file.display()
         );
     }

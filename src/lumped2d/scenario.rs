@@ -210,7 +210,8 @@ impl ProfileScenario {
             Error::format(
                 crate::io::toml_location(text, source, &e),
                 crate::io::toml_message(&e),
-                "check the key names and values against the profile scenario format (README, \"Other commands\": talus profile; examples/profile_bench.toml)",
+                "check the key names and values against the profile scenario format (README, \"Other commands\": \
+                 talus profile; examples/profile_bench.toml)",
             )
         })?;
         s.source = Some(source.to_string());
