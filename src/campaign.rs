@@ -218,7 +218,9 @@ impl Campaign {
                 ),
                 Some(h) if h < -RELEASE_BELOW_GROUND_M => return at(
                     format!("{point} lies {:.2} m below the ground under it", -h),
-                    "check z_m (the rock's centre, in the terrain's vertical datum) and that the columns are in order",
+                    "check z_m (the rock's centre, in the terrain's vertical datum) and that the columns are in order; \
+                     a centre measured on a steep face of a coarse DEM can lie under its interpolated ground: give \
+                     it the ground's height there plus half the block",
                 ),
                 Some(h) if h > RELEASE_ABOVE_GROUND_NOTE_M => {
                     high.push(format!("{} ({h:.0} m, line {})", r.trajectory_id, r.line))

@@ -98,6 +98,15 @@ fn a_bench_mesh_over_the_triangle_limit_is_refused_before_it_is_built() {
     }
 }
 
+/// A negative value after a space is the flag's value, refused by talus's own check (clap took it for a flag:
+/// "unexpected argument '-2'").
+#[test]
+fn a_negative_value_after_a_flag_gets_talus_own_message() {
+    let dir = tempfile::tempdir().unwrap();
+    let args = ["mesh", "bench", "--bench-height-m", "-20", "--out", "m.obj"];
+    refused(&args, dir.path(), &["--bench-height-m", "must be a positive number", "-20"]);
+}
+
 #[test]
 fn a_bench_study_with_a_mesh_over_the_triangle_limit_is_refused() {
     let dir = tempfile::tempdir().unwrap();

@@ -234,7 +234,15 @@ enum Command {
 
 /// Parses the command line and runs the command.
 pub fn main() -> anyhow::Result<()> {
-    let cli = match Cli::try_parse() {
+    // A negative number after a flag is its value (`--bench-height-m -20` then gets talus's own "must be positive",
+    // not clap's "unexpected argument '-2'"), in every subcommand.
+    fn allow_negatives(cmd: clap::Command) -> clap::Command {
+        cmd.allow_negative_numbers(true).mut_subcommands(allow_negatives)
+    }
+    let parsed = allow_negatives(<Cli as clap::CommandFactory>::command())
+        .try_get_matches()
+        .and_then(|m| <Cli as clap::FromArgMatches>::from_arg_matches(&m));
+    let cli = match parsed {
         Ok(c) => c,
         Err(e) => {
             // Help and version go to stdout with exit 0; usage errors exit 2 with clap's message.
