@@ -250,9 +250,11 @@ pub fn load_terrain(sc: &Scenario) -> Result<Terrain> {
 
 /// Builds the run setup (terrain, sources, shapes) of a scenario with overrides applied.
 pub fn setup(sc: &Scenario, overrides: &RunOverrides) -> Result<Setup> {
-    let terrain = load_terrain(sc)?;
+    let mut terrain = load_terrain(sc)?;
     let total = overrides.rocks.or(sc.file.simulation.rocks);
     let sources = Sources::build(&sc.file.sources, &terrain, total, &format!("{}: sources", sc.path.display()))?;
+    // The run's warnings are the terrain's notes (printed before the rocks run, kept in summary.json).
+    terrain.notes.extend(sources.notes.iter().cloned());
     Setup::new(sc, terrain, sources, overrides.seed.unwrap_or(sc.file.simulation.seed))
 }
 

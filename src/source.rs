@@ -45,6 +45,8 @@ pub struct Source {
 pub struct Sources {
     /// The zones, in scenario order.
     pub sources: Vec<Source>,
+    /// What building them noticed: a polygon partly off the terrain (its rocks start from the part over it).
+    pub notes: Vec<String>,
 }
 
 impl Sources {
@@ -52,6 +54,7 @@ impl Sources {
     /// rocks in all; `field` locates the sources in errors (e.g. `scenario.toml: sources`).
     pub fn build(specs: &[SourceSpec], terrain: &Terrain, total: Option<usize>, field: &str) -> Result<Sources> {
         let mut sources = Vec::with_capacity(specs.len());
+        let mut notes = Vec::new();
         for (i, spec) in specs.iter().enumerate() {
             let f = format!("{field}[{i}]");
             if spec.kind == SourceKind::Campaign {
@@ -116,15 +119,24 @@ impl Sources {
                             [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
                         });
                     // Area over the terrain, by a fixed 64 × 64 lattice over the bounding box.
-                    let mut covered = 0usize;
+                    let (mut inside, mut covered) = (0usize, 0usize);
                     for a in 0..64 {
                         for b in 0..64 {
                             let x = bbox[0] + (a as f64 + 0.5) / 64.0 * (bbox[2] - bbox[0]);
                             let y = bbox[1] + (b as f64 + 0.5) / 64.0 * (bbox[3] - bbox[1]);
-                            if point_in_polygon(x, y, &pts) && terrain.surface.at(x, y).is_some() {
-                                covered += 1;
+                            if point_in_polygon(x, y, &pts) {
+                                inside += 1;
+                                covered += terrain.surface.at(x, y).is_some() as usize;
                             }
                         }
+                    }
+                    // Over a tenth off the terrain is worth a word (ours): its rocks all start from the rest.
+                    if covered > 0 && 10 * covered < 9 * inside {
+                        notes.push(format!(
+                            "{f}.points: {:.0} % of the polygon lies off the terrain; its rocks start from the part \
+                             over it",
+                            100.0 * (inside - covered) as f64 / inside as f64
+                        ));
                     }
                     if covered == 0 {
                         return Err(Error::invalid(
@@ -202,7 +214,7 @@ impl Sources {
                 "give count = N on a source, or --rocks N",
             ));
         }
-        Ok(Sources { sources })
+        Ok(Sources { sources, notes })
     }
 
     /// Total rocks.

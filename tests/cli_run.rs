@@ -298,6 +298,19 @@ fn keys_the_terrain_does_not_use_are_warned_about_and_recorded() {
     let clean = scenario(dir.path(), "", 0.3, "300.0");
     let o = talus().args(["run", clean.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
     assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"), "{}", String::from_utf8_lossy(&o.stderr));
+    // A source polygon two thirds off the terrain (y 10-100 m over a DEM of y 0-40 m): its rocks all start from the
+    // third over it, which is said.
+    let text = std::fs::read_to_string(&clean).unwrap().replace(
+        "type = \"polyline\"\npoints = [[500004.0, 5000010.0], [500004.0, 5000030.0]]",
+        "type = \"polygon\"\npoints = [[500004.0, 5000010.0], [500030.0, 5000010.0], [500030.0, 5000100.0], \
+         [500004.0, 5000100.0]]",
+    );
+    assert!(text.contains("polygon"));
+    std::fs::write(&clean, text).unwrap();
+    let o = talus().args(["run", clean.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("warning: ") && err.contains("sources[0].points: 67 % of the polygon lies off"), "{err}");
 }
 
 #[test]
