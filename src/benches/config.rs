@@ -339,13 +339,13 @@ impl StudyConfig {
         positive("bench_height_m", self.bench_height_m, "e.g. bench_height_m = 20")?;
         crate::parallel::check_threads("threads", self.threads)?;
         if self.n_benches == 0 {
-            return Err(Error::invalid("n_benches", "must be at least 1", "e.g. n_benches = 5"));
+            return Err(Error::invalid("n_benches", "must be at least 1", "give 1 or more benches, e.g. 5"));
         }
         check_list("face_angles_deg", &self.face_angles_deg, |a| a > 1.0 && a < 89.9, "between 1 and 89.9 degrees")?;
         check_list("bench_widths_m", &self.bench_widths_m, |w| w >= 0.0, "0 or more metres")?;
         check_list("masses_kg", &self.masses_kg, |m| m > 0.0, "positive masses in kg")?;
         if self.repeats == 0 {
-            return Err(Error::invalid("repeats", "must be at least 1", "e.g. repeats = 1"));
+            return Err(Error::invalid("repeats", "must be at least 1", "give 1 or more repeats (5 pools five seeds)"));
         }
         if !(self.retention_target > 0.0 && self.retention_target <= 1.0) {
             return Err(Error::invalid(

@@ -109,7 +109,7 @@ impl BenchGeometry {
             }
         }
         if self.n_benches == 0 {
-            return Err(Error::invalid(field("n_benches"), "must be at least 1", "set n_benches = 1 or more"));
+            return Err(Error::invalid(field("n_benches"), "must be at least 1", "give 1 or more benches"));
         }
         self.check_mesh_size(prefix)
     }
