@@ -240,6 +240,17 @@ fn cli_profile_runs_a_scenario() {
     }
     let out = talus(&["profile", &repo("examples/profile_bench.toml"), "--out", "p2", "--rocks", "0"], dir.path());
     assert_eq!(out.status.code(), Some(2));
+    // A material no segment has (a calibrated zone carried to a design profile without it): warned about, kept in
+    // summary.json.
+    let text = std::fs::read_to_string(repo("examples/profile_bench.toml")).unwrap();
+    std::fs::write(dir.path().join("zoned.toml"), text + "\n[materials.zone1]\npreset = \"floor_all\"\n").unwrap();
+    let out = talus(&["profile", "zoned.toml", "--out", "zoned", "--rocks", "20"], dir.path());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let warning = "[materials.zone1] is defined but no segment of the profile has it";
+    assert!(err.contains(&format!("warning: {warning}")), "{err}");
+    let summary = std::fs::read_to_string(dir.path().join("zoned/summary.json")).unwrap();
+    assert!(summary.contains(warning), "{summary}");
     // The section example: a profile cut from the Tyrol DEM.
     let out = talus(&["profile", &repo("examples/profile_tyrol.toml"), "--out", "tyrol", "--rocks", "20"], dir.path());
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));

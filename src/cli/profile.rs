@@ -38,6 +38,9 @@ pub fn run(a: ProfileArgs) -> anyhow::Result<()> {
     let summary = super::with_threads(a.control.threads, || {
         run_profile(&scenario, &a.out).map_err(|e| super::running(&a.scenario, e))
     })?;
+    for w in &summary.warnings {
+        eprintln!("warning: {w}");
+    }
     let s = summary.stop_reasons;
     say!(
         "{} rocks in {:.2} s ({:.0} rocks/s): {} stopped, {} left the profile, {} hit the event cap, {} the time cap",

@@ -273,6 +273,9 @@ pub struct ProfileSummary {
     pub rocks_per_second: f64,
     /// Files written in the output folder.
     pub outputs: Vec<String>,
+    /// What the run noticed: materials the scenario defines but no segment of the profile has (as when a
+    /// calibrated model's zone is carried to a design profile without it).
+    pub warnings: Vec<String>,
 }
 
 fn num(v: f64) -> String {
@@ -420,6 +423,10 @@ pub fn run_profile(scenario: &ProfileScenario, out_dir: &Path) -> Result<Profile
     // The pool this runs in (`cli::with_threads` installs the one asked for).
     let threads = crate::parallel::threads_used(0);
     let (x0, x1) = profile.x_range_m();
+    let warnings = (scenario.materials.keys())
+        .filter(|m| !profile.material_names().contains(m))
+        .map(|m| format!("[materials.{m}] is defined but no segment of the profile has it"))
+        .collect();
     let summary = ProfileSummary {
         talus_version: env!("CARGO_PKG_VERSION").to_string(),
         name: scenario.name.clone(),
@@ -452,6 +459,7 @@ pub fn run_profile(scenario: &ProfileScenario, out_dir: &Path) -> Result<Profile
         outputs: ["endpoints.csv", "envelopes.csv", "collectors.csv", "profile.csv", "summary.json"]
             .map(String::from)
             .to_vec(),
+        warnings,
     };
     crate::io::write_json_atomic(&out_dir.join("summary.json"), &summary)?;
     Ok(summary)
