@@ -3,7 +3,7 @@
 //! `cv_report.*`; a 3-fold study after a 5-fold one left `fold_4` and `fold_5`, which `talus envelope
 //! DIR/fold_*/...` then mixed in), so that the folder holds one study, as `talus run` does with its summary's files
 //! (ours). Only files of the names a calibration writes are touched, in the folder itself and in its `fold_N` and
-//! `repeat_N` folders, and only when the folder holds an earlier calibration's report.
+//! `repeat_N` folders, and only when the folder (or one of those) holds an earlier calibration's report.
 
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
@@ -52,10 +52,15 @@ pub struct EarlierOutputs {
 }
 
 impl EarlierOutputs {
-    /// Lists the files of an earlier calibration in `dir` (none when `dir` holds no calibration report).
+    /// Lists the files of an earlier calibration in `dir`: none unless `dir`, or one of its `fold_N` / `repeat_N`
+    /// folders (a k-fold study stopped before its summary), holds a calibration report.
     pub fn list(dir: &Path) -> EarlierOutputs {
+        let has_report = |d: &Path| REPORTS.iter().any(|r| d.join(r).is_file());
+        let folders = std::fs::read_dir(dir).into_iter().flatten().flatten();
+        let marked = has_report(dir)
+            || folders.filter(|e| is_output_folder(&e.file_name().to_string_lossy())).any(|e| has_report(&e.path()));
         let mut earlier = EarlierOutputs::default();
-        if REPORTS.iter().any(|r| dir.join(r).is_file()) {
+        if marked {
             earlier.collect(dir);
         }
         earlier
@@ -114,5 +119,27 @@ mod tests {
         }
         assert!(is_output_folder("fold_12") && is_output_folder("repeat_1"));
         assert!(!is_output_folder("fold_") && !is_output_folder("fold_a") && !is_output_folder("data"));
+    }
+
+    /// A k-fold study stopped after its first fold left `fold_1/` and no summary: still an earlier calibration's.
+    /// A file written again since the listing stays; a user's file stays.
+    #[test]
+    fn an_interrupted_study_is_listed_and_what_was_not_written_again_goes() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = dir.path();
+        std::fs::create_dir(d.join("fold_1")).unwrap();
+        for f in ["fold_1/report.json", "fold_1/runs.csv", "notes.md", "runs.csv"] {
+            std::fs::write(d.join(f), "old").unwrap();
+        }
+        let earlier = EarlierOutputs::list(d);
+        assert_eq!(earlier.files.len(), 3, "{earlier:?}");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+        let tmp = d.join(".runs.csv.tmp");
+        std::fs::write(&tmp, "new").unwrap();
+        std::fs::rename(&tmp, d.join("runs.csv")).unwrap();
+        assert_eq!(earlier.remove_stale().unwrap(), 2);
+        assert!(!d.join("fold_1").exists() && d.join("notes.md").is_file());
+        assert_eq!(std::fs::read_to_string(d.join("runs.csv")).unwrap(), "new");
+        assert_eq!(EarlierOutputs::list(d).files.len(), 0, "no report left: nothing listed");
     }
 }
