@@ -656,21 +656,30 @@ pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path, track_point_noise_
 /// gets `observed_trajectories.csv`: each run's true path (a point every millisecond, [`Model3d::tracks`]) to 1 mm
 /// and 1 ms, every height plus Gaussian noise of sd `track_point_noise_m` (0 for exact tracks; with the case's own
 /// `track_noise_m`, the very tracks of the campaign in memory). The files read back give the same runs; the
-/// terrain read from OBJ lies in another local frame, so simulations agree in distribution, not to the bit.
+/// terrain read from OBJ lies in another local frame, so simulations agree in distribution, not to the bit. A rest
+/// point off the terrain (a rock that left it, or one its survey noise puts past an edge) is written at the edge,
+/// its run-out measured to there: `talus calibrate` refuses rest points off the terrain.
 ///
 /// # Errors
 /// The campaign cannot be simulated, or a file cannot be written.
 pub fn write_terrain_campaign(spec: &Synthetic3d, dir: &Path, track_point_noise_m: f64) -> Result<()> {
     let model = synthetic_3d(spec, SimParams::default())?;
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    // The terrain's horizontal extent in the campaign's frame, a millimetre inside its edges.
+    let t = model.terrain();
+    let (x0, y0, x1, y1) = t.surface.bounds_xy();
+    let [a, b] = [[x0, y0], [x1, y1]].map(|[x, y]| t.to_file_frame(&nalgebra::Vector3::new(x, y, 0.0)));
+    let inside = |v: f64, k: usize| v.clamp(a[k].min(b[k]) + 1e-3, a[k].max(b[k]) - 1e-3);
     let mut release = String::from("trajectory_id,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,block_id\n");
     let mut rest = String::from("trajectory_id,x_m,y_m,z_m,observed_runout_m,block_id\n");
     let mut blocks = BTreeMap::new();
     for r in model.runs() {
         let state: Vec<String> = r.release_m.iter().chain(&r.velocity_mps).map(|v| v.to_string()).collect();
         release += &format!("{},{},{}\n", r.id, state.join(","), r.block_id);
-        let [x, y, z] = r.rest_m;
-        rest += &format!("{},{x},{y},{z},{},{}\n", r.id, r.runout_m, r.block_id);
+        let ([x, y, z], [x_r, y_r, _]) = (r.rest_m, r.release_m);
+        let (x, y) = (inside(x, 0), inside(y, 1));
+        let runout_m = if [x, y] == [r.rest_m[0], r.rest_m[1]] { r.runout_m } else { (x - x_r).hypot(y - y_r) };
+        rest += &format!("{},{x},{y},{z},{runout_m},{}\n", r.id, r.block_id);
         blocks.insert(r.block_id.clone(), (r.mass_kg, r.size_m));
     }
     let shape = if spec.shape == "boulder" { "boulder.csv" } else { spec.shape.as_str() };
