@@ -115,7 +115,9 @@ pub fn run(a: BenchesArgs) -> anyhow::Result<()> {
             pb.set_position(done as u64);
         }
     };
-    let summary = run_benches(&c, &a.out, &progress).context("running the bench study")?;
+    let what =
+        a.config.as_ref().map_or("the bench study".to_string(), |p| format!("the bench study of {}", p.display()));
+    let summary = run_benches(&c, &a.out, &progress).with_context(|| format!("running {what}"))?;
     if let Some((_, pb)) = bar.borrow_mut().take() {
         pb.finish_and_clear();
     }
