@@ -371,7 +371,7 @@ impl ScenarioFile {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         toml::from_str(&text).map_err(|e| {
             let location = crate::io::toml_location(&text, &path.display().to_string(), &e);
-            let mut message = crate::io::toml_message(&e);
+            let mut message = crate::io::toml_message(&text, &e);
             // [simulation] is the only table with flattened keys, where serde cannot list the keys it expects.
             if message.starts_with("unknown field") && !message.contains("expected") {
                 message.push_str(&format!(", expected one of {}", simulation_keys()));

@@ -274,7 +274,7 @@ impl StudyConfig {
         toml::from_str(text).map_err(|e| {
             Error::format(
                 crate::io::toml_location(text, source, &e),
-                crate::io::toml_message(&e),
+                crate::io::toml_message(text, &e),
                 "check the key names and values against the study format (README, \"The bench design study\"; \
                  examples/benches_quick.toml)",
             )

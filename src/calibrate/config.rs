@@ -532,7 +532,7 @@ impl CalibrationConfig {
         let cfg: CalibrationConfig = toml::from_str(text).map_err(|e| {
             Error::format(
                 crate::io::toml_location(text, source, &e),
-                crate::io::toml_message(&e),
+                crate::io::toml_message(text, &e),
                 "see the calibration settings in docs/calibration.md; keys are case-sensitive",
             )
         })?;
@@ -870,6 +870,8 @@ mod tests {
         let e = |text: &str| CalibrationConfig::from_toml_str(text, "c.toml").unwrap_err().to_string();
         let err = e("# settings\nseed = 1\nrepeats = \"x\"\n");
         assert!(err.contains("c.toml:3") && err.contains("expected a whole number of 0 or more"), "{err}");
+        let err = e("seed = 1\n[terrain]\nup = \"z\"\n[terrain]\nclip = []\n");
+        assert!(err.contains("c.toml:4") && err.contains("duplicate key `terrain`"), "{err}");
         let err = e("# settings\nseed = 1\nrepeats = 20\n\nrepeets = 20\n");
         assert!(err.contains("c.toml:5") && err.contains("repeets"), "{err}");
         let err = e("seed = 1\n[materials.ground]\nrn_mean = { min = 0.1, max = 0.5, strat = 0.2 }\n");

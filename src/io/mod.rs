@@ -30,9 +30,14 @@ pub struct MeshData {
 }
 
 /// A TOML error's message in a user's words: serde's Rust type names (`expected f64`, `expected usize`) as what
-/// the value should be.
-pub fn toml_message(e: &toml::de::Error) -> String {
+/// the value should be, and a duplicate key named (`text` is the file's text).
+pub fn toml_message(text: &str, e: &toml::de::Error) -> String {
     let mut m = e.message().trim().to_string();
+    if m == "duplicate key" {
+        if let Some(key) = e.span().and_then(|s| text.get(s)).map(str::trim).filter(|k| !k.is_empty()) {
+            m = format!("duplicate key `{key}` (a key or table given twice)");
+        }
+    }
     for (rust, words) in [
         ("f64", "a number"),
         ("usize", "a whole number of 0 or more"),

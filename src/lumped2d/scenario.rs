@@ -209,7 +209,7 @@ impl ProfileScenario {
         let mut s: ProfileScenario = toml::from_str(text).map_err(|e| {
             Error::format(
                 crate::io::toml_location(text, source, &e),
-                crate::io::toml_message(&e),
+                crate::io::toml_message(text, &e),
                 "check the key names and values against the profile scenario format (README, \"Other commands\": \
                  talus profile; examples/profile_bench.toml)",
             )
