@@ -428,15 +428,13 @@ impl ScenarioFile {
             materials.push(spec.build(name, &f(&format!("materials.{name}")))?);
         }
         let known = |m: &str| self.materials.contains_key(m);
+        let defined = || self.materials.keys().cloned().collect::<Vec<_>>().join(", ");
         for (from, to) in &self.terrain.material_names {
             if !known(to) {
                 return Err(Error::invalid(
                     f(&format!("terrain.material_names.{from}")),
                     format!("names material '{to}', which is not defined"),
-                    format!(
-                        "define [materials.{to}] or use one of: {}",
-                        self.materials.keys().cloned().collect::<Vec<_>>().join(", ")
-                    ),
+                    format!("define [materials.{to}] or use one of: {}", defined()),
                 ));
             }
         }
@@ -465,7 +463,7 @@ impl ScenarioFile {
                     format!("'{m}' is not defined (the soft-ground drag would apply nowhere)"),
                     format!(
                         "use one of: {} (or leave soft_materials out: the drag then applies on every material)",
-                        self.materials.keys().cloned().collect::<Vec<_>>().join(", ")
+                        defined()
                     ),
                 ));
             }

@@ -272,9 +272,10 @@ impl StudyConfig {
     /// TOML errors (syntax, unknown keys, wrong types) located as `source:line`.
     pub fn from_toml_str(text: &str, source: &str) -> Result<StudyConfig> {
         toml::from_str(text).map_err(|e| {
-            Error::format(
-                crate::io::toml_location(text, source, &e),
-                crate::io::toml_message(text, &e),
+            crate::io::toml_error(
+                text,
+                source,
+                &e,
                 "check the key names and values against the study format (README, \"The bench design study\"; \
                  examples/benches_quick.toml)",
             )

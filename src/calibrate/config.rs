@@ -530,9 +530,10 @@ impl CalibrationConfig {
     /// Parses settings from TOML text; `source` names it in errors.
     pub fn from_toml_str(text: &str, source: &str) -> Result<CalibrationConfig> {
         let cfg: CalibrationConfig = toml::from_str(text).map_err(|e| {
-            Error::format(
-                crate::io::toml_location(text, source, &e),
-                crate::io::toml_message(text, &e),
+            crate::io::toml_error(
+                text,
+                source,
+                &e,
                 "see the calibration settings in docs/calibration.md; keys are case-sensitive",
             )
         })?;

@@ -298,15 +298,11 @@ fn write_profile_summary(dir: &Path, s: &ProfileEnvelope) -> Result<()> {
     }
     if let Some(fl) = &s.floor {
         // The seeds alone, as ranges over the floor's runs, so that the models' rows can be read against them.
-        let range = |get: &dyn Fn(&ProfileModel) -> Option<f64>, digits: usize| {
-            let v: Vec<f64> = fl.models.iter().filter_map(get).collect();
-            let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| (a.min(x), b.max(x)));
-            if v.is_empty() {
-                "–".to_string()
-            } else {
-                format!("{lo:.digits$}–{hi:.digits$}")
-            }
-        };
+        let range =
+            |get: &dyn Fn(&ProfileModel) -> Option<f64>, digits: usize| match Spread3::of(fl.models.iter().map(get)) {
+                Spread3 { min: Some(lo), max: Some(hi), .. } => format!("{lo:.digits$}–{hi:.digits$}"),
+                _ => "–".to_string(),
+            };
         let first = |m: &ProfileModel| m.bench_fractions.as_ref().and_then(|b| b.get(1).copied());
         md += &format!(
             "| seeds alone ({} runs of {}; [floor/envelope.md](floor/envelope.md)) | | | | {} | {} | {} | {} | {} |\n",

@@ -51,6 +51,11 @@ pub fn toml_message(text: &str, e: &toml::de::Error) -> String {
     m
 }
 
+/// A TOML error as talus reports it: at `source:line`, in a user's words ([`toml_message`]), with `hint`.
+pub fn toml_error(text: &str, source: &str, e: &toml::de::Error, hint: &str) -> crate::Error {
+    crate::Error::format(toml_location(text, source, e), toml_message(text, e), hint)
+}
+
 /// Where a TOML error lies: `source:line` (1-based, the line of the error's span), or `source` without a span.
 pub fn toml_location(text: &str, source: &str, e: &toml::de::Error) -> String {
     match e.span() {

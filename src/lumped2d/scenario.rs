@@ -207,9 +207,10 @@ impl ProfileScenario {
     /// TOML errors (syntax, unknown keys, wrong types) located as `source:line`.
     pub fn from_toml_str(text: &str, source: &str) -> Result<ProfileScenario> {
         let mut s: ProfileScenario = toml::from_str(text).map_err(|e| {
-            Error::format(
-                crate::io::toml_location(text, source, &e),
-                crate::io::toml_message(text, &e),
+            crate::io::toml_error(
+                text,
+                source,
+                &e,
                 "check the key names and values against the profile scenario format (README, \"Other commands\": \
                  talus profile; examples/profile_bench.toml)",
             )
