@@ -98,9 +98,11 @@ impl ZoneSettings {
         1 + (kj > self.energy_kj[0]) as u8 + (kj > self.energy_kj[1]) as u8
     }
 
-    /// Probability class (1..=3) of a reach probability.
+    /// Probability class (1..=3) of a reach probability. Compared at the rasters' precision (f32), so that a cell
+    /// reached by exactly 10 % of the rocks, stored as the f32 nearest 0.1 (slightly above it), is not high.
     pub fn probability(&self, p: f64) -> u8 {
-        1 + (p > self.reach[0]) as u8 + (p > self.reach[1]) as u8
+        let above = |threshold: f64| (p as f32 > threshold as f32) as u8;
+        1 + above(self.reach[0]) + above(self.reach[1])
     }
 
     /// The zone grids (levels, matrix cells) of a run from its rasters, in the order of [`crate::run::RASTERS`]
@@ -143,6 +145,12 @@ mod tests {
         let s = ZoneSettings::default();
         assert_eq!((s.intensity(29.0), s.intensity(30.0), s.intensity(31.0), s.intensity(301.0)), (1, 1, 2, 3));
         assert_eq!((s.probability(0.001), s.probability(0.05), s.probability(0.5)), (1, 2, 3));
+        // A cell reached by exactly 10 % (1 %) of the rocks, as the rasters store it, is medium (low): the f32
+        // nearest 0.1 lies above 0.1.
+        let stored = |rocks: f64, of: f64| (rocks / of) as f32 as f64;
+        assert!(stored(5.0, 50.0) > 0.1);
+        assert_eq!((s.probability(stored(5.0, 50.0)), s.probability(stored(6.0, 50.0))), (2, 3));
+        assert_eq!((s.probability(stored(1.0, 100.0)), s.probability(stored(2.0, 100.0))), (1, 2));
         assert_eq!([level(3, 1), level(2, 3), level(2, 2), level(1, 3), level(1, 2), level(1, 1)], [3, 3, 2, 2, 1, 1]);
         let mut reach = Grid::filled(4, 1, 0.0, 1.0, 1.0, 0.0);
         reach.values = vec![f32::NAN, 0.0, 0.05, 0.5];

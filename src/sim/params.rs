@@ -153,8 +153,10 @@ pub struct Effects {
     /// Ground roughness felt relative to rock size (PlatRock, physics.md §4): at each impact the contact normal
     /// tilts by U(0, 1)·atan(rough/R) toward a random azimuth, R the equivalent radius; this value is `rough`, m.
     pub roughness_m: Option<f64>,
-    /// Rolling resistance μ_r (Azzoni et al. 1995, physics.md §4): while in contact, the speed along the ground
-    /// drops by μ_r·g·cos α per second, and the spin by the same fraction (our discretisation).
+    /// Rolling resistance μ_r (Azzoni et al. 1995, physics.md §4 and §8): while in contact, the speed along the
+    /// ground drops by A·μ_r·g·cos α per second, and the spin by the same fraction (our discretisation), with A the
+    /// share of the kinetic energy along the ground in translation: m/(m + I/R²) for a rolling rock as in Azzoni,
+    /// 1 for a sliding one (the force μ_r·N then does its work μ_r·N·v on the rock's whole kinetic energy).
     pub rolling_resistance: Option<f64>,
     /// Drag in soft ground: while in contact with one of `soft_materials` (all materials if empty), velocity and
     /// spin decay as exp(−c·t) with c this rate, 1/s (a linear stand-in for RAMMS's scarring drag, ours).

@@ -576,7 +576,15 @@ impl<'a> Run<'a> {
             let along = v - n * v.dot(&n);
             let speed = along.norm();
             if speed > 0.0 {
-                let drop = (mu_r * GRAVITY_MPS2 * n.z.abs() * h).min(speed);
+                // Azzoni et al. (1995), physics.md §4 and §8: a = −A·g·cos α·μ_r with A = m/(m + I/R²), the share
+                // of a rolling rock's kinetic energy in translation; here that share for any motion (1 sliding,
+                // 5/7 rolling as a sphere; ours for a tumbling rock), so that the force μ_r·N does its work on
+                // the whole kinetic energy along the ground.
+                let w = vel.angular_body_radps;
+                let translational = 0.5 * self.rock.mass_kg * speed * speed;
+                let rotational = 0.5 * w.component_mul(&self.rock.inertia_kg_m2).dot(&w);
+                let share = translational / (translational + rotational);
+                let drop = (share * mu_r * GRAVITY_MPS2 * n.z.abs() * h).min(speed);
                 let f = 1.0 - drop / speed;
                 vel.linear_mps = v - along * (1.0 - f);
                 vel.angular_body_radps *= f;
