@@ -400,6 +400,42 @@ fn with_rolling_resistance_a_rolling_ball_slows_as_azzoni_says() {
     assert_relative_eq!(braking, a_share * mu_r * GRAVITY_MPS2 * th.cos(), max_relative = 0.1);
 }
 
+/// A ball: the convex hull of 600 points spread evenly over a sphere (a Fibonacci lattice).
+fn ball(mass_kg: f64) -> RockBody {
+    let points: Vec<[f64; 3]> = (0..600)
+        .map(|i| {
+            let z = 1.0 - (2 * i + 1) as f64 / 600.0;
+            let phi = i as f64 * std::f64::consts::PI * (3.0 - 5f64.sqrt());
+            let rho = (1.0 - z * z).sqrt();
+            [rho * phi.cos(), rho * phi.sin(), z]
+        })
+        .collect();
+    let size = RockSize::Mass { mass_kg, density_kg_m3: 2650.0 };
+    RockBody::new(&ShapeKind::Hull { name: "ball".into(), points }, size, "ball").unwrap()
+}
+
+#[test]
+fn a_drag_acts_for_the_contacts_duration_whatever_the_time_step() {
+    // The solver resolves an impact in one step; a drag in contact then acts for `contact_duration_s` (2 ms), not
+    // for one step: a cube dropped flat with Cr 0.5 onto soft ground of drag c leaves with Cr·v·exp(−c·2 ms) at steps
+    // of 2, 1 and 0.5 ms alike, and rises to Cr²·h·exp(−2c·2 ms) (a drag per step would give exp(−c·dt)).
+    let (cr, c, drop_m) = (0.5, 50.0, 2.0);
+    let terrain =
+        Terrain::from_function(40.0, 8, Material { drag_per_s: c, ..material(cr, 40.0, 30.0) }, |_, _| 0.0).unwrap();
+    let r = rock(ShapeKind::Cube, 2650.0); // 1 m cube
+    let start = at_rest(Vector3::new(20.3, 20.1, 0.5 + drop_m), UnitQuaternion::identity());
+    let duration_s = SimParams::default().contact_duration_s;
+    for dt_s in [0.002, 0.001, 0.0005] {
+        let mut rec = Record::default();
+        let params = SimParams { dt_s, max_time_s: 1.5, ..Default::default() };
+        simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut rec);
+        let rising = rec.rebound().expect("rising");
+        let apex_clearance = rising.clearance_m + rising.velocity_mps.z.powi(2) / (2.0 * GRAVITY_MPS2);
+        let want = cr * cr * drop_m * (-2.0 * c * duration_s).exp();
+        assert_relative_eq!(apex_clearance, want, max_relative = 0.02);
+    }
+}
+
 #[test]
 fn block_on_an_incline_below_its_static_friction_angle_stays_put() {
     let terrain = incline(25.0, material(0.0, 30.0, 20.0));

@@ -38,6 +38,13 @@ pub struct SimParams {
     pub stop_spin_radps: f64,
     /// Rest test: how long both must hold, s (default: 0.5, physics.md §8).
     pub stop_duration_s: f64,
+    /// How long a touch of the ground counts as contact, s (default: 0.002, ours). The solver resolves a touch in
+    /// one step, so without a duration what acts in contact (rolling resistance, the drags, the slippage of
+    /// `slip_friction_max_deg`) would act for one step per impact, and a vertex that lifts off for a step would
+    /// meet a new impact (a new roughness tilt, a new Cr when drawn per impact): all of it would scale with `dt_s`.
+    /// A touch counts for `contact_duration_s / dt_s` steps (rounded, at least 1); the default, the default step,
+    /// keeps every result at that step as it was before this setting.
+    pub contact_duration_s: f64,
     /// Penetration left uncorrected, m (default: 0.002, ours). Deeper penetration is projected out (position only,
     /// never velocity).
     pub penetration_slop_m: f64,
@@ -62,6 +69,7 @@ impl Default for SimParams {
             stop_speed_mps: 0.1,
             stop_spin_radps: 0.2,
             stop_duration_s: 0.5,
+            contact_duration_s: 0.002,
             penetration_slop_m: 0.002,
             solver_iterations: 100,
             cr_draw: CrDraw::PerRock,
@@ -90,6 +98,14 @@ impl SimParams {
             ));
         }
         pos("max_flight_step_s", self.max_flight_step_s, "use about 0.25 s")?;
+        pos("contact_duration_s", self.contact_duration_s, "use 0.002 s, the default")?;
+        if self.contact_duration_s > 0.1 {
+            return Err(Error::invalid(
+                format!("{prefix}contact_duration_s"),
+                format!("{} s is longer than a rock's impact lasts", self.contact_duration_s),
+                "use 0.002 s, the default (impacts of rocks on soil last milliseconds)",
+            ));
+        }
         pos("max_time_s", self.max_time_s, "use for example 120 s")?;
         pos("stop_speed_mps", self.stop_speed_mps, "use about 0.1 m/s")?;
         pos("stop_spin_radps", self.stop_spin_radps, "use about 0.2 rad/s")?;

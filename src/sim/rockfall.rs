@@ -223,7 +223,16 @@ struct Run<'a> {
     /// tan of the static and dynamic friction angles of each material for this rock (the terrain's, or drawn
     /// where a material has a dynamic friction spread).
     friction: Vec<(f64, f64)>,
-    touching: Vec<bool>,
+    /// Steps a touch counts as contact for (`contact_duration_s` over the step, at least 1).
+    touch_steps: u32,
+    /// Per hull vertex: steps it still counts as touching the ground (0: a touch now is a new impact).
+    touch_left: Vec<u32>,
+    /// Per hull vertex: the restitution drawn at its last touch (kept while it counts as touching).
+    vertex_cr: Vec<f64>,
+    /// Steps what acts in contact still acts after the last touch, and the contact's averaged normal and drag rate
+    /// (1/s) it acts with.
+    brake_left: u32,
+    brake_at: (Vector3<f64>, f64),
     barrier_met: Vec<bool>,
     /// Soft-ground drag rate of each material, 1/s: its own, or the `soft_drag_per_s` effect's where that acts.
     drag_per_s: Vec<f64>,
@@ -288,7 +297,11 @@ impl<'a> Run<'a> {
             t: 0.0,
             cr,
             friction,
-            touching: vec![false; rock.vertices_m.len()],
+            touch_steps: ((params.contact_duration_s / params.dt_s).round() as u32).max(1),
+            touch_left: vec![0; rock.vertices_m.len()],
+            vertex_cr: vec![0.0; rock.vertices_m.len()],
+            brake_left: 0,
+            brake_at: (Vector3::z(), 0.0),
             barrier_met: vec![false; terrain.barriers.len()],
             drag_per_s: terrain
                 .materials
@@ -524,14 +537,27 @@ impl<'a> Run<'a> {
                 });
             }
         }
-        for t in self.touching.iter_mut() {
-            *t = false;
+        for t in self.touch_left.iter_mut() {
+            *t = t.saturating_sub(1);
         }
         for c in &self.contacts {
-            self.touching[c.vertex] = true;
+            self.touch_left[c.vertex] = self.touch_steps;
+            self.vertex_cr[c.vertex] = c.cr_drawn;
         }
         if in_contact {
+            let normal = self.contacts.iter().fold(Vector3::zeros(), |a, c| a + c.normal).normalize();
+            let drag = self
+                .contacts
+                .iter()
+                .map(|k| self.drag_per_s[self.terrain.triangle_material[k.triangle as usize] as usize])
+                .fold(0.0, f64::max);
+            self.brake_at = (normal, drag);
+            self.brake_left = self.touch_steps;
+        }
+        let braking = self.brake_left > 0;
+        if braking {
             self.brake(&mut after, h);
+            self.brake_left -= 1;
         }
         self.s.velocity_mps = after.linear_mps;
         self.s.omega_body_radps = after.angular_body_radps;
@@ -548,7 +574,7 @@ impl<'a> Run<'a> {
         }
         std::mem::swap(&mut self.previous, &mut self.contacts);
         self.t += h;
-        self.advance_slippage(in_contact, h);
+        self.advance_slippage(braking, h);
         in_contact
     }
 
@@ -567,11 +593,12 @@ impl<'a> Run<'a> {
     }
 
     /// Rolling resistance (when on) and drag (the largest soft-ground rate among the touched materials plus the
-    /// vegetation drag, then the scarring drag) on a rock in contact over a step of `h`.
+    /// vegetation drag, then the scarring drag) on a rock in contact over a step of `h`, with the normal and the
+    /// soft-ground rate of its last touch.
     fn brake(&self, vel: &mut Velocities, h: f64) {
         let effects = &self.params.effects;
+        let (n, soft_drag_per_s) = self.brake_at;
         if let Some(mu_r) = effects.rolling_resistance {
-            let n = self.contacts.iter().fold(Vector3::zeros(), |a, c| a + c.normal).normalize();
             let v = vel.linear_mps;
             let along = v - n * v.dot(&n);
             let speed = along.norm();
@@ -590,12 +617,7 @@ impl<'a> Run<'a> {
                 vel.angular_body_radps *= f;
             }
         }
-        let c = self
-            .contacts
-            .iter()
-            .map(|k| self.drag_per_s[self.terrain.triangle_material[k.triangle as usize] as usize])
-            .fold(0.0, f64::max)
-            + self.vegetation_drag_per_s;
+        let c = soft_drag_per_s + self.vegetation_drag_per_s;
         if c > 0.0 {
             let f = (-c * h).exp();
             vel.linear_mps *= f;
@@ -636,13 +658,14 @@ impl<'a> Run<'a> {
                 mu_dynamic = effects.slip_friction(mu_dynamic, self.slippage_m);
                 mu_static = mu_static.max(mu_dynamic);
             }
-            let new = !self.touching[i];
-            let mut cr = self.cr[m];
-            if new && self.params.cr_draw == CrDraw::PerImpact {
-                cr = self.terrain.materials[m].cr.sample(self.rng);
-            } else if let Some(prev) = self.previous.iter().find(|c| c.vertex == i) {
-                cr = prev.cr_drawn;
-            }
+            let new = self.touch_left[i] == 0;
+            let mut cr = if !new {
+                self.vertex_cr[i]
+            } else if self.params.cr_draw == CrDraw::PerImpact {
+                self.terrain.materials[m].cr.sample(self.rng)
+            } else {
+                self.cr[m]
+            };
             let cr_drawn = cr;
             if new {
                 if let Some(rough) = effects.roughness_m {
@@ -673,12 +696,12 @@ impl<'a> Run<'a> {
         }
     }
 
-    /// The fastest contact that was not touching in the previous step and approaches faster than the bounce
+    /// The fastest contact that did not count as touching before this step and approaches faster than the bounce
     /// threshold, if any.
     fn new_impact(&self, before: &Velocities, q: &UnitQuaternion<f64>) -> Option<Contact> {
         let mut best: Option<(f64, Contact)> = None;
         for c in &self.contacts {
-            if self.touching[c.vertex] {
+            if self.touch_left[c.vertex] > 0 {
                 continue;
             }
             let b = self.rock.vertices_m[c.vertex];
