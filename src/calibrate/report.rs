@@ -277,7 +277,11 @@ pub fn write_report(
             if seen.len() <= 4 {
                 figures.push((
                     name,
-                    format!("Calibration runs' run-out residuals against {}, baseline and final.", d.covariate),
+                    format!(
+                        "Calibration runs' run-out residuals against {}, baseline and final (a covariate of the \
+                         simulated paths is the baseline's for both).",
+                        d.covariate
+                    ),
                 ));
             }
         }
@@ -390,7 +394,6 @@ pub fn write_report(
     crate::io::write_bytes_atomic(&dir.join("report.md"), md.as_bytes())
 }
 
-/// The file of the chart of run-out residual against `covariate`.
 /// A chart of the baseline's and the final model's points (markers), with a horizontal line where the model is right.
 fn baseline_and_final(title: String, x_label: &str, y_label: &str, points: [Vec<(f64, f64)>; 2], right: f64) -> Chart {
     let [base, fin] = points;
@@ -407,6 +410,7 @@ fn baseline_and_final(title: String, x_label: &str, y_label: &str, points: [Vec<
     }
 }
 
+/// The file of the chart of run-out residual against `covariate`.
 fn residual_chart(covariate: &str) -> String {
     format!("residual_vs_{covariate}.svg")
 }
