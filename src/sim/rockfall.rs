@@ -401,6 +401,10 @@ impl<'a> Run<'a> {
     /// Exact ballistic motion over `h`, with free rotation, emitting samples along the parabola. Returns true if a
     /// barrier caught the rock on the way.
     fn fly(&mut self, h: f64, observer: &mut impl Observer) -> bool {
+        // A flight ends any contact (a rock is clear of the ground only steps after its last touch, so with the
+        // default contact duration nothing counts as touching here already).
+        self.touch_left.fill(0);
+        self.brake_left = 0;
         let (x0, v0) = (self.s.position_m, self.s.velocity_mps);
         let horizontal = (v0.x * v0.x + v0.y * v0.y).sqrt() * h;
         let pieces =
