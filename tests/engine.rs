@@ -142,20 +142,28 @@ fn resting_on_incline(r: &RockBody, slope_deg: f64, x: f64, speed_mps: f64) -> R
     }
 }
 
+/// A 1,000 kg flat box sent down `slope_deg` at 5 m/s on ground of Cr 0 and the friction angles given, until it
+/// stops: the distance it slid, m, and its final spin, rad/s.
+fn slide(slope_deg: f64, static_deg: f64, dynamic_deg: f64, params: &SimParams) -> (f64, f64) {
+    let terrain = incline(slope_deg, material(0.0, static_deg, dynamic_deg));
+    let r = rock(ShapeKind::FlatBox, 1000.0);
+    let start = resting_on_incline(&r, slope_deg, 60.0, SLIDE_MPS);
+    let out = simulate(&terrain, &r, start, params, &mut stream(1, 0), &mut ());
+    assert_eq!(out.stop_reason, StopReason::Stopped);
+    ((out.final_state.position_m - start.position_m).norm(), out.final_state.omega_body_radps.norm())
+}
+
+/// The start speed of [`slide`], m/s.
+const SLIDE_MPS: f64 = 5.0;
+
 #[test]
 fn block_sliding_down_an_incline_stops_where_the_closed_form_says() {
     let (slope, phi_d) = (10.0f64, 30.0f64);
-    let terrain = incline(slope, material(0.0, 32.0, phi_d));
-    let r = rock(ShapeKind::FlatBox, 1000.0);
-    let v0 = 5.0;
-    let start = resting_on_incline(&r, slope, 60.0, v0);
-    let out = simulate(&terrain, &r, start, &SimParams::default(), &mut stream(1, 0), &mut ());
-    assert_eq!(out.stop_reason, StopReason::Stopped);
+    let (moved, spin) = slide(slope, 32.0, phi_d, &SimParams::default());
     let (th, mu) = (slope.to_radians(), phi_d.to_radians().tan());
-    let want = v0 * v0 / (2.0 * GRAVITY_MPS2 * (mu * th.cos() - th.sin()));
-    let moved = (out.final_state.position_m - start.position_m).norm();
+    let want = SLIDE_MPS * SLIDE_MPS / (2.0 * GRAVITY_MPS2 * (mu * th.cos() - th.sin()));
     assert_relative_eq!(moved, want, max_relative = 0.005);
-    assert!(out.final_state.omega_body_radps.norm() < 0.2);
+    assert!(spin < 0.2);
 }
 
 #[test]
@@ -342,19 +350,13 @@ fn with_rolling_resistance_a_sliding_block_stops_where_the_closed_form_says() {
     // physics.md §4): the resistance adds μ_r·g·cos θ to the friction's deceleration, so the block stops after
     // v0² / (2 g ((μ + μ_r) cos θ − sin θ)).
     let (slope, phi_d, mu_r) = (10.0f64, 25.0f64, 0.1f64);
-    let terrain = incline(slope, material(0.0, 27.0, phi_d));
-    let r = rock(ShapeKind::FlatBox, 1000.0);
-    let v0 = 5.0;
-    let start = resting_on_incline(&r, slope, 60.0, v0);
     let params = SimParams {
         effects: talus::sim::Effects { rolling_resistance: Some(mu_r), ..Default::default() },
         ..Default::default()
     };
-    let out = simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut ());
-    assert_eq!(out.stop_reason, StopReason::Stopped);
+    let (moved, _) = slide(slope, 27.0, phi_d, &params);
     let th = slope.to_radians();
-    let want = v0 * v0 / (2.0 * GRAVITY_MPS2 * ((phi_d.to_radians().tan() + mu_r) * th.cos() - th.sin()));
-    let moved = (out.final_state.position_m - start.position_m).norm();
+    let want = SLIDE_MPS * SLIDE_MPS / (2.0 * GRAVITY_MPS2 * ((phi_d.to_radians().tan() + mu_r) * th.cos() - th.sin()));
     assert_relative_eq!(moved, want, max_relative = 0.01);
 }
 
@@ -366,20 +368,7 @@ fn with_rolling_resistance_a_rolling_ball_slows_as_azzoni_says() {
     // sphere released at rest on 20° (tan 0.36) with friction high enough to roll, with and without μ_r = 0.25:
     // the distances after 1 s give the deceleration the resistance added, 2 (s₀ − s₁) / t². Measured 7 % below
     // A·μ_r·g·cos θ, at time steps of 2, 1 and 0.5 ms alike: the polyhedron rolls over its vertices, not as a ball.
-    let points: Vec<[f64; 3]> = (0..600)
-        .map(|i| {
-            let z = 1.0 - (2 * i + 1) as f64 / 600.0;
-            let phi = i as f64 * std::f64::consts::PI * (3.0 - 5f64.sqrt());
-            let rho = (1.0 - z * z).sqrt();
-            [rho * phi.cos(), rho * phi.sin(), z]
-        })
-        .collect();
-    let ball = RockBody::new(
-        &ShapeKind::Hull { name: "ball".into(), points },
-        RockSize::Mass { mass_kg: 20_000.0, density_kg_m3: 2650.0 },
-        "ball",
-    )
-    .unwrap();
+    let ball = ball(20_000.0);
     let radius_m = ball.vertices_m.iter().map(|v| v.norm()).sum::<f64>() / ball.vertices_m.len() as f64;
     let a_share = 1.0 / (1.0 + ball.inertia_kg_m2.mean() / (ball.mass_kg * radius_m * radius_m));
     let (slope, mu_r, t_s) = (20.0f64, 0.25, 1.0);

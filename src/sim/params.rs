@@ -89,23 +89,19 @@ impl SimParams {
                 Err(Error::invalid(format!("{prefix}{name}"), format!("must be a positive number, got {v}"), hint))
             }
         };
+        let at_most = |name: &str, v: f64, max: f64, what: &str, hint: &str| {
+            if v > max {
+                Err(Error::invalid(format!("{prefix}{name}"), format!("{v} s {what}"), hint))
+            } else {
+                Ok(())
+            }
+        };
         pos("dt_s", self.dt_s, "use a step of 0.0005 to 0.002 s")?;
-        if self.dt_s > 0.01 {
-            return Err(Error::invalid(
-                format!("{prefix}dt_s"),
-                format!("{} s is too coarse for contact", self.dt_s),
-                "use 0.0005 to 0.002 s",
-            ));
-        }
+        at_most("dt_s", self.dt_s, 0.01, "is too coarse for contact", "use 0.0005 to 0.002 s")?;
         pos("max_flight_step_s", self.max_flight_step_s, "use about 0.25 s")?;
         pos("contact_duration_s", self.contact_duration_s, "use 0.002 s, the default")?;
-        if self.contact_duration_s > 0.1 {
-            return Err(Error::invalid(
-                format!("{prefix}contact_duration_s"),
-                format!("{} s is longer than a rock's impact lasts", self.contact_duration_s),
-                "use 0.002 s, the default (impacts of rocks on soil last milliseconds)",
-            ));
-        }
+        let hint = "use 0.002 s, the default (impacts of rocks on soil last milliseconds)";
+        at_most("contact_duration_s", self.contact_duration_s, 0.1, "is longer than a rock's impact lasts", hint)?;
         pos("max_time_s", self.max_time_s, "use for example 120 s")?;
         pos("stop_speed_mps", self.stop_speed_mps, "use about 0.1 m/s")?;
         pos("stop_spin_radps", self.stop_spin_radps, "use about 0.2 rad/s")?;
