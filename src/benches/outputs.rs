@@ -75,9 +75,9 @@ pub struct ModelCounts {
     pub rocks: usize,
     /// Rocks counted in the capture fractions.
     pub counted: usize,
-    /// Rocks that left the terrain by a side or the back (not counted).
+    /// Rocks that left the terrain by the back, or by a side before passing bench 1 (not counted).
     pub left: usize,
-    /// Rocks that ended on the crest floor (not counted).
+    /// Rocks that ended before the middle of the first face, on the crest floor or hung on its edge (not counted).
     pub crest: usize,
     /// Rocks by engine stop reason.
     pub stop_reasons: BTreeMap<String, usize>,
@@ -576,8 +576,8 @@ fn report(result: &StudyResult, s: &StudySummary) -> String {
     for (m, t) in s.models.iter().zip(&s.timings) {
         let _ = writeln!(
             r,
-            "- {}: {} rocks in {:.2} s ({:.0} rocks/s); {} counted, {} left the terrain by a side or the back, {} \
-             stayed on the crest floor; stop reasons: {}.",
+            "- {}: {} rocks in {:.2} s ({:.0} rocks/s); {} counted, {} left the terrain by the back or by a side \
+             before passing bench 1, {} stayed at the crest; stop reasons: {}.",
             m.model,
             m.rocks,
             t.wall_time_s,
@@ -631,11 +631,12 @@ fn report(result: &StudyResult, s: &StudySummary) -> String {
     }
     let _ = writeln!(
         r,
-        "\n## How rocks are counted\n\nBench k holds the rocks whose centre of mass ends between the crest of face k \
-         and the crest of face k + 1 (on face k or its catch bench); bench 0 the rocks that end past the last catch \
-         bench. Rocks that leave the terrain by a side or the back, or stay on the crest floor, are not counted \
-         (numbers above); 3DRB rocks that leave beyond the toe floor are past the last bench and counted as bench \
-         0. 3DRB run i has shape i mod S and mass (i div S) mod M of the S shapes and M masses; 2DLM run i has \
+        "\n## How rocks are counted\n\nBench k holds the rocks whose centre of mass ends between the middle of face k \
+         and the middle of face k + 1 (resting against the toe of face k, on its catch bench, or hung on its outer \
+         edge); bench 0 the rocks that end past the last catch bench. Rocks that end before the middle of face 1 \
+         (on the crest floor or hung on its edge: they never went down) and rocks that leave the terrain by the \
+         back or by a side before passing bench 1 are not counted (numbers above); a 3DRB rock that leaves by a \
+         side over bench k > 1 counts on bench k, and one that leaves beyond the toe floor as bench 0. 3DRB run i has shape i mod S and mass (i div S) mod M of the S shapes and M masses; 2DLM run i has \
          mass i mod M. Run i draws from the random stream (seed + repeat, i) in every configuration, so all \
          configurations see the same release draws.\n"
     );

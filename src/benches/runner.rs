@@ -4,14 +4,17 @@
 //! ([`crate::parallel::map_in_order`]), so results are identical for any thread count.
 //!
 //! # How a rock is counted (ours, following [`BenchGeometry::bench_at`])
-//! Bench k (1 = first below the release) holds the rocks whose centre of mass ends between the crest of face k
-//! and the crest of face k + 1: on face k or on the catch bench below it. Bench 0 holds the rocks that end past
-//! the last catch bench, including those that leave the terrain beyond the toe floor. Two outcomes are not
-//! counted in the fractions, and are reported instead:
-//! - `left`: the rock left the terrain by a side (3DRB; the extruded stack has a finite width) or by the back;
-//!   where it would have stopped on a wider stack is unknown.
-//! - `crest`: the rock ended behind the crest of face 1, on the crest floor: it was never released onto the
-//!   slope (a large 3DRB rock that tips back onto the crest).
+//! Bench k (1 = first below the release) holds the rocks whose centre of mass ends between the middle of face k
+//! and the middle of face k + 1: resting against the toe of face k, on the catch bench, or hung on its outer edge
+//! (the upper half of face k + 1). Bench 0 holds the rocks that end past the last catch bench, including those
+//! that leave the terrain beyond the toe floor. A 3DRB rock that leaves the stack by a side (it has a finite
+//! width) after passing bench 1 counts on the bench it left over (smarties rolling like wheels along a bench
+//! floor): it was not caught by the benches above. Two outcomes are not counted in the fractions, and are
+//! reported instead:
+//! - `left`: the rock left the terrain by the back, or by a side before passing bench 1; whether bench 1 would
+//!   have caught it on a wider stack is unknown.
+//! - `crest`: the rock ended before the middle of face 1: on the crest floor, or hung on the crest edge of the
+//!   top face (a large 3DRB block resting across the edge): it never went down the slope.
 
 use super::config::{ResolvedMaterials, StudyConfig};
 use super::release::{draw_release, mass_index, shape_index};
@@ -66,9 +69,9 @@ pub struct Configuration {
 pub enum RockClass {
     /// On bench k (1..=n_benches), or 0: past the last bench.
     Bench(usize),
-    /// Left the terrain by a side or the back: not counted.
+    /// Left the terrain by the back, or by a side before passing bench 1: not counted.
     Left,
-    /// Ended on the crest floor: not counted.
+    /// Ended before the middle of the first face (on the crest floor or hung on its edge): not counted.
     Crest,
 }
 
@@ -112,9 +115,10 @@ pub struct Cell {
     pub seed: u64,
     /// `per_bench[k]`: rocks on bench k (1..=n_benches); `per_bench[0]`: past the last bench.
     pub per_bench: Vec<usize>,
-    /// Rocks that left the terrain by a side or the back (not counted in `per_bench`).
+    /// Rocks that left the terrain by the back, or by a side before passing bench 1 (not counted in `per_bench`).
     pub left: usize,
-    /// Rocks that ended on the crest floor (not counted in `per_bench`).
+    /// Rocks that ended before the middle of the first face: on the crest floor or hung on its edge (not counted in
+    /// `per_bench`).
     pub crest: usize,
     /// Rocks by engine stop reason.
     pub stop_reasons: BTreeMap<&'static str, usize>,
@@ -329,10 +333,11 @@ fn run_model(
 
 /// Counts a rock by its end x; `left_terrain` when the engine stopped it for leaving the terrain.
 fn classify(g: &BenchGeometry, end_x_m: f64, left_terrain: bool) -> RockClass {
-    let past_crest = end_x_m >= g.crest_floor_m;
-    match (left_terrain, past_crest, g.bench_at(end_x_m)) {
-        // Past the last bench whichever way it left: no bench can catch it any more.
-        (true, true, 0) => RockClass::Bench(0),
+    let (crest, toe) = g.face_span_m(1);
+    let down_the_slope = end_x_m >= 0.5 * (crest + toe);
+    match (left_terrain, down_the_slope, g.bench_at(end_x_m)) {
+        // Left past bench 1 (past the last bench, or by a side over bench k): the benches above did not catch it.
+        (true, true, k) if k != 1 => RockClass::Bench(k),
         (true, _, _) => RockClass::Left,
         (false, false, _) => RockClass::Crest,
         (false, true, k) => RockClass::Bench(k),
@@ -467,5 +472,29 @@ impl Rigid3dCtx {
             stop_reason: out.stop_reason.as_str(),
             class,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_rock_counts_where_it_rests_and_one_at_the_crest_or_lost_before_bench_1_does_not() {
+        let g = BenchGeometry::default();
+        let (crest, toe) = g.face_span_m(1);
+        let (crest3, _) = g.face_span_m(3);
+        // Hung across the top crest's edge (0.5 m past it, as 10 t blocks end): never went down.
+        assert_eq!(classify(&g, crest + 0.5, false), RockClass::Crest);
+        assert_eq!(classify(&g, crest - 2.0, false), RockClass::Crest);
+        // Resting against the toe of face 1, on its catch bench, hung on its outer edge.
+        assert_eq!(classify(&g, toe - 0.5, false), RockClass::Bench(1));
+        assert_eq!(classify(&g, toe + 3.0, false), RockClass::Bench(1));
+        assert_eq!(classify(&g, g.face_span_m(2).0 + 0.5, false), RockClass::Bench(1));
+        // Left by a side over bench 3: the benches above did not catch it. Over bench 1, or by the back: unknown.
+        assert_eq!(classify(&g, crest3 + 0.9 * g.face_run_m(), true), RockClass::Bench(3));
+        assert_eq!(classify(&g, toe + 3.0, true), RockClass::Left);
+        assert_eq!(classify(&g, crest - 2.0, true), RockClass::Left);
+        assert_eq!(classify(&g, 1e4, true), RockClass::Bench(0));
     }
 }

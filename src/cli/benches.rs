@@ -123,7 +123,7 @@ pub fn run(a: BenchesArgs) -> anyhow::Result<()> {
     }
     for (t, m) in summary.timings.iter().zip(&summary.models) {
         say!(
-            "{}: {} rocks in {:.2} s ({:.0} rocks/s); {} counted, {} left by a side, {} stayed on the crest",
+            "{}: {} rocks in {:.2} s ({:.0} rocks/s); {} counted, {} left before passing bench 1, {} stayed at the crest",
             t.model.label(),
             t.rocks,
             t.wall_time_s,

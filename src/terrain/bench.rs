@@ -203,13 +203,14 @@ impl BenchGeometry {
         (crest, crest + self.face_run_m())
     }
 
-    /// Which bench a horizontal position x belongs to: k in 1..=n_benches from the crest of face k to the crest of
-    /// face k + 1 (face k and the catch bench below it), 0 past the last bench. Positions behind the first crest
-    /// count as 1.
+    /// Which bench a horizontal position x belongs to: k in 1..=n_benches from the middle of face k to the middle
+    /// of face k + 1 (the lower half of face k, where a rock rests against the toe of catch bench k, the catch
+    /// bench, and the upper half of face k + 1, where a rock hangs on the bench's outer edge), 0 past the last
+    /// bench. Positions before the middle of face 1 count as 1 (the bench study counts them as the crest's).
     pub fn bench_at(&self, x_m: f64) -> usize {
         for k in 1..=self.n_benches {
             let (_, toe) = self.face_span_m(k);
-            if x_m <= toe + self.bench_width_m {
+            if x_m <= toe + self.bench_width_m + 0.5 * self.face_run_m() {
                 return k;
             }
         }
@@ -297,8 +298,13 @@ mod tests {
         assert_eq!(p.iter().filter(|v| v.part == BenchPart::Face).count(), 6);
         assert_eq!(g.bench_at(g.face_span_m(1).1 + 1.0), 1);
         assert_eq!(g.bench_at(g.face_span_m(2).1 + 1.0), 2);
-        assert_eq!(g.bench_at(g.face_span_m(5).1 + 6.9), 5);
-        assert_eq!(g.bench_at(g.face_span_m(5).1 + 7.1), 0);
+        // The upper half of face k + 1 belongs with bench k (a rock hanging on its outer edge), the lower half with
+        // bench k + 1.
+        let (crest2, toe2) = g.face_span_m(2);
+        assert_eq!(g.bench_at(crest2 + 0.4 * (toe2 - crest2)), 1);
+        assert_eq!(g.bench_at(crest2 + 0.6 * (toe2 - crest2)), 2);
+        assert_eq!(g.bench_at(g.face_span_m(5).1 + 7.1), 5);
+        assert_eq!(g.bench_at(g.face_span_m(5).1 + 7.0 + 0.6 * run), 0);
     }
 
     #[test]
