@@ -371,6 +371,19 @@ fn ascii_grid_bad_token_names_file_and_line() {
     .unwrap();
     let err = ascii_grid::read_grid(&path).unwrap_err().to_string();
     assert!(err.contains("bad.asc:8") && err.contains("'5,5'"), "{err}");
+    // nan, inf and values no float32 holds are refused at their line too (nan was read as nodata without a word,
+    // 1e308 became inf and was blamed on a vertex).
+    for (token, header) in [("nan", "-9999"), ("1e308", "-9999"), ("-1e308", "-9999"), ("inf", "-9999")] {
+        let text = format!(
+            "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\nNODATA_value {header}\n1 2 3\n4 {token} 6\n"
+        );
+        std::fs::write(&path, text).unwrap();
+        let err = ascii_grid::read_grid(&path).unwrap_err().to_string();
+        assert!(
+            err.contains("bad.asc:8") && err.contains(&format!("'{token}'")) && err.contains("row 2, column 2"),
+            "{err}"
+        );
+    }
 }
 
 // ---------------------------------------------------------------------------------------------------------------

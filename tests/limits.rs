@@ -132,6 +132,25 @@ fn more_rocks_than_a_run_can_hold_are_refused() {
     // The same from the sources' counts.
     bench_scenario(dir.path(), "count = 1000", "count = 20000000");
     refused(&["run", "scenario.toml", "--out", "out"], dir.path(), &["20000000 rocks", "limit of 10000000"]);
+    // A profile's rocks, a bench study's runs and a calibration's repeats have limits too: a fuzzer's huge counts
+    // ran for ever or aborted on a failed allocation (exit 134) before these.
+    let profile = shipped("examples/profile_bench.toml");
+    let profile = profile.to_str().unwrap();
+    refused(
+        &["profile", profile, "--rocks", "4294967297", "--out", "out"],
+        dir.path(),
+        &["rocks", "limit of 10000000"],
+    );
+    refused(&["benches", "--runs-3drb", "4294967297", "--out", "out"], dir.path(), &["rigid3d.runs", "limit"]);
+    refused(&["benches", "--runs-2dlm", "4294967297", "--out", "out"], dir.path(), &["lumped2d.runs", "limit"]);
+    let campaign = shipped("examples/profile_campaign");
+    let profile_csv = campaign.join("profile.csv");
+    let (campaign, profile_csv) = (campaign.to_str().unwrap(), profile_csv.to_str().unwrap());
+    let calibrate = ["calibrate", campaign, "--terrain", profile_csv, "--model", "2dlm", "--out", "out"];
+    refused(&[&calibrate[..], &["--repeats", "10000000"]].concat(), dir.path(), &["repeats", "limit of 10000"]);
+    // An --out that is a file: said with a fix, as by the other commands (it said only "File exists").
+    std::fs::write(dir.path().join("out"), "").unwrap();
+    refused(&calibrate, dir.path(), &["--out", "is a file"]);
 }
 
 #[test]

@@ -348,6 +348,23 @@ impl StudyConfig {
         if self.repeats == 0 {
             return Err(Error::invalid("repeats", "must be at least 1", "give 1 or more repeats (5 pools five seeds)"));
         }
+        // Every rock of the study is kept (rocks.csv): at most MAX_ROCKS a model, as a run's.
+        let configurations = self.face_angles_deg.len() * self.bench_widths_m.len();
+        for (model, field) in [(super::Model::Lumped2d, "lumped2d.runs"), (super::Model::Rigid3d, "rigid3d.runs")] {
+            let rocks = self.rocks_per_configuration(model).checked_mul(configurations * self.repeats);
+            if rocks.is_none_or(|n| n > crate::source::MAX_ROCKS) {
+                return Err(Error::invalid(
+                    field,
+                    format!(
+                        "runs × {configurations} configurations × {} repeats is more than the limit of {} rocks a \
+                         study",
+                        self.repeats,
+                        crate::source::MAX_ROCKS
+                    ),
+                    "give fewer runs (--runs-2dlm, --runs-3drb) or repeats",
+                ));
+            }
+        }
         if !(self.retention_target > 0.0 && self.retention_target <= 1.0) {
             return Err(Error::invalid(
                 "retention_target",

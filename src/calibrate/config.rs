@@ -464,6 +464,15 @@ impl Default for CalibrationConfig {
 /// Most population-fit searches per start point: search k uses the streams of `seed + k`, which must stay clear of
 /// the selection's.
 const MAX_SEARCH_STARTS: usize = 10;
+/// Most simulations a run for the metrics (ours: far past where more repeats change a metric, and a bound on the
+/// memory the simulations of a calibration hold).
+const MAX_REPEATS: usize = 10_000;
+/// Most evaluations of a population fit (ours).
+const MAX_EVALUATIONS: usize = 100_000;
+/// Most permutations of a test (ours; 999 resolves p down to 0.001).
+const MAX_PERMUTATIONS: usize = 1_000_000;
+/// Most grid points a parameter of the back-analysis (ours; its cost grows as their square).
+const MAX_GRID_POINTS: usize = 101;
 /// Most start points of the population fit.
 const MAX_START_POINTS: usize = 10;
 /// Most start points screened.
@@ -550,6 +559,13 @@ impl CalibrationConfig {
                 f("repeats"),
                 format!("{} is too few for a 5–95 % interval", self.repeats),
                 "use 20 or more",
+            ));
+        }
+        if self.repeats > MAX_REPEATS {
+            return Err(Error::invalid(
+                f("repeats"),
+                format!("{} is more than the limit of {MAX_REPEATS} simulations a run", self.repeats),
+                "use 20 to 100: the metrics' noise falls as one over the square root of repeats",
             ));
         }
         if self.search_repeats == 0 || self.search_repeats > self.repeats {
@@ -655,8 +671,12 @@ impl CalibrationConfig {
                 "use the survey's error on a rest point in metres, e.g. 0.5, or leave it out",
             ));
         }
-        if self.max_evaluations.is_some_and(|n| n < 5) {
-            return Err(Error::invalid(f("max_evaluations"), "must be at least 5", "use for example 60"));
+        if self.max_evaluations.is_some_and(|n| !(5..=MAX_EVALUATIONS).contains(&n)) {
+            return Err(Error::invalid(
+                f("max_evaluations"),
+                format!("must be in [5, {MAX_EVALUATIONS}]"),
+                "use for example 60",
+            ));
         }
         self.simulation.validate(&format!("{source}: simulation."))?;
         if !self.simulation.effects.is_empty() {
@@ -689,11 +709,19 @@ impl CalibrationConfig {
                 "use 0.05, 0.05 and 0.05",
             ));
         }
-        if e.permutations < 99 {
-            return Err(Error::invalid(f("effects.permutations"), "must be at least 99", "use 999"));
+        if !(99..=MAX_PERMUTATIONS).contains(&e.permutations) {
+            return Err(Error::invalid(
+                f("effects.permutations"),
+                format!("must be in [99, {MAX_PERMUTATIONS}]"),
+                "use 999",
+            ));
         }
-        if self.back_analysis.grid_points < 3 {
-            return Err(Error::invalid(f("back_analysis.grid_points"), "must be at least 3", "use 7"));
+        if !(3..=MAX_GRID_POINTS).contains(&self.back_analysis.grid_points) {
+            return Err(Error::invalid(
+                f("back_analysis.grid_points"),
+                format!("must be in [3, {MAX_GRID_POINTS}]"),
+                "use 7",
+            ));
         }
         for (m, params) in &self.materials {
             for (p, s) in params {

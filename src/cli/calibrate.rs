@@ -88,6 +88,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
         cfg.threads = t;
     }
     cfg.validate(&source)?;
+    super::check_out_folder("--out", &a.out)?;
     let model = calibrate::open_model(&a.campaign, &a.terrain, kind, &cfg, &source)?;
     let runs = model.runs();
     // Every input is checked before the output folder is made.

@@ -14,7 +14,8 @@
 //! `yllcorner` or `yllcenter`, `cellsize` (or `dx` and `dy` for rectangular cells) and the optional
 //! `nodata_value`. Values are separated by any whitespace, with any line breaks (LF or CRLF); a leading UTF-8
 //! byte-order mark is skipped. A value is nodata when it equals the nodata value at `f32` precision, the precision
-//! heights are kept at (so `-3.4028235e+38` in the header matches `-3.4028234663852886e+38` in the data). A `.prj`
+//! heights are kept at (so `-3.4028235e+38` in the header matches `-3.4028234663852886e+38` in the data); any other
+//! value must be finite and fit a float32 (`nan`, `inf` or `1e308` in the data are refused at their line). A `.prj`
 //! file with the same stem holds the CRS as WKT; it is read into [`Crs::wkt`] and written back from it.
 
 use crate::error::{Error, Result};
@@ -167,19 +168,24 @@ pub fn read_grid(path: &Path) -> Result<Grid> {
                 first_extra_line.get_or_insert(line_no);
                 continue;
             }
-            let v = token.parse::<f64>().ok().filter(|v| !v.is_infinite()).ok_or_else(|| {
-                Error::at_line(
-                    path,
-                    line_no,
-                    format!(
-                        "'{token}' is not a number (value {found} of {n}, row {}, column {})",
-                        (found - 1) / ncols + 1,
-                        (found - 1) % ncols + 1
-                    ),
-                    "fix the value; mark missing data with the NODATA_value",
-                )
-            })?;
-            values.push(if v.is_nan() || nodata.is_some_and(|nd| v as f32 == nd as f32) { f32::NAN } else { v as f32 });
+            // The nodata value as declared, or a finite value a float32 holds (the grid's precision): `nan`, `inf`
+            // and 1e308 are refused.
+            let parsed = token.parse::<f64>().ok();
+            let is_nodata = |v: f64| nodata.is_some_and(|nd| v as f32 == nd as f32);
+            let v =
+                parsed.filter(|&v| is_nodata(v) || (v.is_finite() && v.abs() <= f32::MAX as f64)).ok_or_else(|| {
+                    Error::at_line(
+                        path,
+                        line_no,
+                        format!(
+                            "'{token}' is not a number a float32 grid holds (value {found} of {n}, row {}, column {})",
+                            (found - 1) / ncols + 1,
+                            (found - 1) % ncols + 1
+                        ),
+                        "fix the value; mark missing data with the NODATA_value",
+                    )
+                })?;
+            values.push(if is_nodata(v) { f32::NAN } else { v as f32 });
         }
     }
     if let Some(line) = first_extra_line {

@@ -319,6 +319,11 @@ impl ProfileScenario {
         match self.rocks {
             None => return Err(Error::invalid("rocks", "is missing", "give the number of rocks, e.g. rocks = 300")),
             Some(0) => return Err(Error::invalid("rocks", "must be at least 1", "e.g. rocks = 300")),
+            Some(n) if n > crate::source::MAX_ROCKS => return Err(Error::invalid(
+                "rocks",
+                format!("{n} is more than the limit of {} rocks a run", crate::source::MAX_ROCKS),
+                "give fewer rocks (--rocks or rocks), or split the ensemble into runs with different seeds (--seed)",
+            )),
             Some(_) => {}
         }
         let release = Release2d {
