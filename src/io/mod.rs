@@ -1,5 +1,14 @@
 //! File formats: terrain meshes and grids in, rasters and tables out. Formats only, no physics.
 
+/// Largest coordinate a mesh vertex may have, m (ours: a million kilometres, far past any projected or geocentric
+/// coordinate; beyond it a triangle's products overflow and the terrain reads as degenerate).
+pub const MAX_COORDINATE_M: f64 = 1e9;
+
+/// True if `c` is a coordinate a mesh may hold: finite and within [`MAX_COORDINATE_M`].
+pub fn coordinate_ok(c: f64) -> bool {
+    c.is_finite() && c.abs() <= MAX_COORDINATE_M
+}
+
 pub mod ascii_grid;
 pub mod atomic;
 pub mod csv_text;

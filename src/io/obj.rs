@@ -354,11 +354,16 @@ fn parse_vertex(path: &Path, line_no: usize, tokens: &[&str]) -> Result<[f64; 3]
         }
         v = v.map(|c| c / w);
     }
-    if let Some(bad) = v.iter().position(|c| !c.is_finite()) {
+    if let Some(bad) = v.iter().position(|&c| !super::coordinate_ok(c)) {
         return Err(Error::at_line(
             path,
             line_no,
-            format!("vertex has a non-finite coordinate ({} = {})", ["x", "y", "z"][bad], tokens[bad]),
+            format!(
+                "vertex has a coordinate that is not finite or beyond ±{:e} m ({} = {})",
+                super::MAX_COORDINATE_M,
+                ["x", "y", "z"][bad],
+                tokens[bad]
+            ),
             "fix or remove this vertex in the modelling tool and export again",
         ));
     }

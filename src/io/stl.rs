@@ -126,11 +126,12 @@ fn check_binary(path: &Path, bytes: &[u8]) -> Result<()> {
         for k in 0..9 {
             let o = 12 + 4 * k;
             let c = f32::from_le_bytes([rec[o], rec[o + 1], rec[o + 2], rec[o + 3]]);
-            if !c.is_finite() {
+            if !super::coordinate_ok(c as f64) {
                 return Err(Error::format(
                     format!("{}: triangle {}", path.display(), t + 1),
                     format!(
-                        "vertex {} has a non-finite coordinate {} = {c} (byte offset {})",
+                        "vertex {} has a coordinate that is not finite or beyond ±{:e} m: {} = {c} (byte offset {})",
+                        super::MAX_COORDINATE_M,
                         k / 3 + 1,
                         ["x", "y", "z"][k % 3],
                         BINARY_HEADER_BYTES + BINARY_TRIANGLE_BYTES * t + o
@@ -213,11 +214,15 @@ fn read_ascii(path: &Path, text: &str) -> Result<Parsed> {
                 let c: f64 = tok.parse().map_err(|_| {
                     Error::at_line(path, l, format!("'{tok}' is not a number"), "write it as `vertex x y z`")
                 })?;
-                if !c.is_finite() {
+                if !super::coordinate_ok(c) {
                     return Err(Error::at_line(
                         path,
                         l,
-                        format!("vertex has a non-finite coordinate ({} = {tok})", ["x", "y", "z"][k]),
+                        format!(
+                            "vertex has a coordinate that is not finite or beyond ±{:e} m ({} = {tok})",
+                            super::MAX_COORDINATE_M,
+                            ["x", "y", "z"][k]
+                        ),
                         "fix the mesh in the modelling tool and export it again",
                     ));
                 }
