@@ -636,9 +636,10 @@ fn report(result: &StudyResult, s: &StudySummary) -> String {
          edge); bench 0 the rocks that end past the last catch bench. Rocks that end before the middle of face 1 \
          (on the crest floor or hung on its edge: they never went down) and rocks that leave the terrain by the \
          back or by a side before passing bench 1 are not counted (numbers above); a 3DRB rock that leaves by a \
-         side over bench k > 1 counts on bench k, and one that leaves beyond the toe floor as bench 0. 3DRB run i has shape i mod S and mass (i div S) mod M of the S shapes and M masses; 2DLM run i has \
-         mass i mod M. Run i draws from the random stream (seed + repeat, i) in every configuration, so all \
-         configurations see the same release draws.\n"
+         side over bench k > 1 counts on bench k, and one that leaves beyond the toe floor as bench 0. 3DRB run \
+         i has shape i mod S and mass (i div S) mod M of the S shapes and M masses; 2DLM run i has mass i mod M. \
+         Run i draws from the random stream (seed + repeat, i) in every configuration, so all configurations see \
+         the same release draws.\n"
     );
     r
 }

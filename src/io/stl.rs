@@ -131,8 +131,8 @@ fn check_binary(path: &Path, bytes: &[u8]) -> Result<()> {
                     format!("{}: triangle {}", path.display(), t + 1),
                     format!(
                         "vertex {} has a coordinate that is not finite or beyond ±{:e} m: {} = {c} (byte offset {})",
-                        super::MAX_COORDINATE_M,
                         k / 3 + 1,
+                        super::MAX_COORDINATE_M,
                         ["x", "y", "z"][k % 3],
                         BINARY_HEADER_BYTES + BINARY_TRIANGLE_BYTES * t + o
                     ),
@@ -298,6 +298,6 @@ mod tests {
         b.truncate(84);
         b.extend(&rec);
         let err = read_bytes(&b).unwrap_err().to_string();
-        assert!(err.contains("triangle 1") && err.contains("vertex 2") && err.contains("y = inf"), "{err}");
+        assert!(err.contains("triangle 1") && err.contains("vertex 2 has") && err.contains("y = inf"), "{err}");
     }
 }
