@@ -4,6 +4,11 @@
 use crate::error::{Error, Result};
 use std::path::Path;
 
+/// Largest number a CSV field may hold (ours: 10¹⁵ is past any coordinate, time stamp in milliseconds or mass
+/// in a field campaign, and far below where squares and products of coordinates overflow: 1e308 passed the
+/// reading and failed after a whole calibration).
+pub const MAX_NUMBER: f64 = 1e15;
+
 /// A CSV file read whole: its header and its rows, fields trimmed, rows of empty fields skipped, each row with
 /// the file line it came from, so that every reader names the line of a bad value the same way.
 ///
@@ -111,16 +116,16 @@ impl Table {
         }
     }
 
-    /// The finite number in column `col` (named `name`) of `row`.
+    /// The finite number in column `col` (named `name`) of `row`, at most [`MAX_NUMBER`] in size.
     ///
     /// # Errors
-    /// The field is empty or not a finite number, naming the file, line and column.
+    /// The field is empty, not a finite number or larger, naming the file, line and column.
     pub fn number(&self, row: &Row, col: usize, name: &str) -> Result<f64> {
         let s = self.text(row, col, name)?;
-        s.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+        s.parse::<f64>().ok().filter(|v| v.is_finite() && v.abs() <= MAX_NUMBER).ok_or_else(|| {
             self.error(
                 row,
-                format!("column `{name}` holds '{s}', not a finite number"),
+                format!("column `{name}` holds '{s}', not a finite number within ±{MAX_NUMBER:e}"),
                 "write a plain number in SI units",
             )
         })
@@ -244,6 +249,9 @@ mod tests {
             assert_eq!(t.number(&t.rows[0], 1, "b").unwrap(), 2.0);
             let e = t.number(&t.rows[1], 1, "b").unwrap_err().to_string();
             assert!(e.contains("t.csv:5") && e.contains("'x'"), "{e}");
+            let t = Table::parse(text.replace('x', "-1e308").as_bytes(), "t.csv", false).unwrap();
+            let e = t.number(&t.rows[1], 1, "b").unwrap_err().to_string();
+            assert!(e.contains("t.csv:5") && e.contains("'-1e308'") && e.contains("within ±1e15"), "{e}");
             let e = t.need("c", "add it").unwrap_err().to_string();
             assert!(e.contains("t.csv:1") && e.contains("`c`") && e.contains("found: a,b"), "{e}");
         }

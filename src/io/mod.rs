@@ -51,7 +51,7 @@ pub fn toml_message(text: &str, e: &toml::de::Error) -> String {
         ("f64", "a number"),
         ("usize", "a whole number of 0 or more"),
         ("u64", "a whole number of 0 or more"),
-        ("u32", "a whole number of 0 or more"),
+        ("u32", "a whole number from 0 to 4294967295"),
         ("i64", "a whole number"),
         ("bool", "true or false"),
     ] {
@@ -70,5 +70,22 @@ pub fn toml_location(text: &str, source: &str, e: &toml::de::Error) -> String {
     match e.span() {
         Some(span) => format!("{source}:{}", text[..span.start.min(text.len())].matches('\n').count() + 1),
         None => source.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// A u32 key given a larger whole number is told the range (it read "expected a whole number of 0 or more").
+    #[test]
+    fn a_toml_message_gives_a_whole_numbers_range() {
+        #[derive(serde::Deserialize, Debug)]
+        struct S {
+            #[allow(dead_code)]
+            n: u32,
+        }
+        let text = "n = 4294967297\n";
+        let e = toml::from_str::<S>(text).unwrap_err();
+        let m = super::toml_message(text, &e);
+        assert!(m.contains("expected a whole number from 0 to 4294967295"), "{m}");
     }
 }

@@ -9,6 +9,9 @@ use crate::error::{number_text, Error, Result};
 /// (vertices, triangles, groups) and several times that once the 3DRB terrain is built from it, and are a
 /// 10 cm edge over the default 100 m × 300 m stack: finer than any rock that runs on it needs.
 pub const MAX_MESH_TRIANGLES: usize = 10_000_000;
+/// Longest length of a bench geometry, m (ours: ten kilometres, past any pit; a huge bench height overflowed the
+/// mesh count and was blamed on `max_edge_m`).
+pub const MAX_LENGTH_M: f64 = 10_000.0;
 
 /// Geometry of a benched slope. Defaults are the paper's stack: 5 benches of 20 m at 60° with 7 m catch benches.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -75,12 +78,12 @@ impl BenchGeometry {
     pub fn validate(&self, prefix: &str) -> Result<()> {
         let field = |name: &str| format!("{prefix}{name}");
         let positive = |name: &str, v: f64| {
-            if v.is_finite() && v > 0.0 {
+            if v.is_finite() && v > 0.0 && v <= MAX_LENGTH_M {
                 Ok(())
             } else {
                 Err(Error::invalid(
                     field(name),
-                    format!("must be a positive number of metres, got {v}"),
+                    format!("must be a positive number of metres up to {MAX_LENGTH_M}, got {}", number_text(v)),
                     "set a value above 0",
                 ))
             }
@@ -100,10 +103,10 @@ impl BenchGeometry {
             ("crest_floor_m", self.crest_floor_m),
             ("toe_floor_m", self.toe_floor_m),
         ] {
-            if !(v.is_finite() && v >= 0.0) {
+            if !(v.is_finite() && v >= 0.0 && v <= MAX_LENGTH_M) {
                 return Err(Error::invalid(
                     field(name),
-                    format!("must be 0 or more metres, got {v}"),
+                    format!("must be 0 to {MAX_LENGTH_M} metres, got {}", number_text(v)),
                     "set a width >= 0",
                 ));
             }
