@@ -103,7 +103,7 @@ impl BenchGeometry {
             ("crest_floor_m", self.crest_floor_m),
             ("toe_floor_m", self.toe_floor_m),
         ] {
-            if !(v.is_finite() && v >= 0.0 && v <= MAX_LENGTH_M) {
+            if !(v.is_finite() && (0.0..=MAX_LENGTH_M).contains(&v)) {
                 return Err(Error::invalid(
                     field(name),
                     format!("must be 0 to {MAX_LENGTH_M} metres, got {}", number_text(v)),
