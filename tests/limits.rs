@@ -88,14 +88,20 @@ fn a_section_of_more_than_a_million_samples_is_refused() {
 #[test]
 fn a_bench_mesh_over_the_triangle_limit_is_refused_before_it_is_built() {
     let dir = tempfile::tempdir().unwrap();
-    for (flag, value) in [("--max-edge-m", "0.001"), ("--lateral-width-m", "1e12"), ("--benches", "100000000")] {
+    for (flag, value) in [("--max-edge-m", "0.001"), ("--lateral-width-m", "9000"), ("--benches", "100000000")] {
         let named = if flag == "--lateral-width-m" { "--max-edge-m" } else { flag };
-        refused(
-            &["mesh", "bench", flag, value, "--out", "m.obj"],
-            dir.path(),
-            &[named, "triangles, more than the limit of 10000000"],
-        );
+        let mut args = vec!["mesh", "bench", flag, value, "--out", "m.obj"];
+        if flag == "--lateral-width-m" {
+            args.extend(["--max-edge-m", "0.2"]);
+        }
+        refused(&args, dir.path(), &[named, "triangles, more than the limit of 10000000"]);
     }
+    // A length past any pit is named itself.
+    refused(
+        &["mesh", "bench", "--lateral-width-m", "1e12", "--out", "m.obj"],
+        dir.path(),
+        &["--lateral-width-m", "up to 10000"],
+    );
 }
 
 /// A negative value after a space is the flag's value, refused by talus's own check (clap took it for a flag:

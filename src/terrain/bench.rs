@@ -84,7 +84,7 @@ impl BenchGeometry {
                 Err(Error::invalid(
                     field(name),
                     format!("must be a positive number of metres up to {MAX_LENGTH_M}, got {}", number_text(v)),
-                    "set a value above 0",
+                    "set a value above 0 and up to 10 km",
                 ))
             }
         };
@@ -107,7 +107,7 @@ impl BenchGeometry {
                 return Err(Error::invalid(
                     field(name),
                     format!("must be 0 to {MAX_LENGTH_M} metres, got {}", number_text(v)),
-                    "set a width >= 0",
+                    "set a width from 0 to 10 km",
                 ));
             }
         }
