@@ -293,4 +293,6 @@ fn a_y_up_terrain_reads_release_points_in_its_own_axes() {
         Err(e) => e.to_string(),
     };
     assert!(e.contains("r4") && e.contains("not over the terrain"), "{e}");
+    // Named at its line of release_points.csv (a release far off the terrain named only its run).
+    assert!(e.contains("release_points.csv:"), "{e}");
 }

@@ -114,6 +114,22 @@ impl Model3d {
             Path::new(source),
         )?;
         terrain.grid_anchor_xy = dem.as_ref().map(|g| [g.x_min_m, g.y_max_m]);
+        // The campaign's points first, so that a point off the terrain is named at its file line.
+        let ground = terrain_extent(&terrain);
+        let high = campaign.check_release_points(
+            |p| {
+                let q = to_local(&terrain, p);
+                terrain.surface.height(q.x, q.y).map(|z| q.z - z)
+            },
+            &ground,
+        )?;
+        campaign.check_rest_points(
+            |p| {
+                let q = to_local(&terrain, p);
+                terrain.surface.at(q.x, q.y).is_some()
+            },
+            &ground,
+        )?;
         let mut bodies = BTreeMap::new();
         for (id, block) in &campaign.blocks {
             bodies.insert(id.clone(), campaign.body(block)?);
@@ -121,22 +137,6 @@ impl Model3d {
         let mut model = Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)?
             .with_release_attempts(cfg.release_attempts)
             .with_rest_noise(cfg.rest_noise_m);
-        let terrain = &model.terrain;
-        let ground = terrain_extent(terrain);
-        let high = campaign.check_release_points(
-            |p| {
-                let q = to_local(terrain, p);
-                terrain.surface.height(q.x, q.y).map(|z| q.z - z)
-            },
-            &ground,
-        )?;
-        campaign.check_rest_points(
-            |p| {
-                let q = to_local(terrain, p);
-                terrain.surface.at(q.x, q.y).is_some()
-            },
-            &ground,
-        )?;
         model.files = Some((campaign.dir.clone(), spec));
         model.notes.extend(campaign.unobserved_note().into_iter().chain(high));
         Ok(model
