@@ -549,7 +549,11 @@ impl<'a> Run<'a> {
             self.vertex_cr[c.vertex] = c.cr_drawn;
         }
         if in_contact {
-            let normal = self.contacts.iter().fold(Vector3::zeros(), |a, c| a + c.normal).normalize();
+            // The averaged normal only rolling resistance uses.
+            let normal = match self.params.effects.rolling_resistance {
+                Some(_) => self.contacts.iter().fold(Vector3::zeros(), |a, c| a + c.normal).normalize(),
+                None => Vector3::z(),
+            };
             let drag = self
                 .contacts
                 .iter()
