@@ -142,6 +142,10 @@ pub fn calibrate(
     }
     // A library caller may not have come through `open_model`: an effect name it cannot use is an error here too.
     cfg.check_effects(model.kind(), "calibration settings")?;
+    // Held-out release points take no part in the release groups the calibration sees.
+    let (grouped, groups) = runs::calibration_groups(model.runs(), cal, model.groups().link_m);
+    let regrouped = model::WithRuns::new(model, grouped, groups);
+    let model: &dyn Model = &regrouped;
     let t0 = Instant::now();
     let mut cfg = cfg.clone();
     if cfg.rebound_weight.is_none() {
@@ -298,7 +302,8 @@ pub fn calibrate(
     let ids = |v: &[usize]| v.iter().map(|&i| runs[i].id.clone()).collect::<Vec<_>>();
     let labels = |c: &Candidate| c.effects.iter().map(|e| e.label.clone()).collect::<Vec<_>>();
     let release_groups = model
-        .group_names()
+        .groups()
+        .names
         .iter()
         .enumerate()
         .map(|(g, name)| report::GroupInfo {

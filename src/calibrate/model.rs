@@ -8,7 +8,7 @@
 
 use super::config::ModelKind;
 use super::params::Candidate;
-use super::runs::{FieldRun, NOT_STARTED_M};
+use super::runs::{FieldRun, ReleaseGroups, NOT_STARTED_M};
 use super::stats::{median, quantile_sorted, sorted};
 use crate::campaign::TrackPoint;
 use crate::error::Result;
@@ -177,8 +177,8 @@ pub trait Model: Sync {
     fn kind(&self) -> ModelKind;
     /// The observed runs.
     fn runs(&self) -> &[FieldRun];
-    /// Names of the release groups (indexed by [`FieldRun::group`]).
-    fn group_names(&self) -> &[String];
+    /// The release groups (names indexed by [`FieldRun::group`]).
+    fn groups(&self) -> &ReleaseGroups;
     /// The declared materials.
     fn materials(&self) -> &[String];
     /// Height of a run's release point above the ground under it, m.
@@ -236,6 +236,73 @@ pub trait Model: Sync {
         _dir: &Path,
     ) -> Result<Vec<(String, String)>> {
         Ok(Vec::new())
+    }
+}
+
+/// A model whose observed runs and release groups are replaced (a calibration's own groups, the zone check's
+/// null draws); everything else is the inner model's.
+pub struct WithRuns<'a> {
+    inner: &'a dyn Model,
+    runs: std::borrow::Cow<'a, [FieldRun]>,
+    groups: ReleaseGroups,
+}
+
+impl<'a> WithRuns<'a> {
+    /// `inner` with `runs` (the same runs, in the same order, as `inner`'s but for what is replaced) and `groups`.
+    pub fn new(
+        inner: &'a dyn Model,
+        runs: impl Into<std::borrow::Cow<'a, [FieldRun]>>,
+        groups: ReleaseGroups,
+    ) -> WithRuns<'a> {
+        WithRuns { inner, runs: runs.into(), groups }
+    }
+}
+
+impl Model for WithRuns<'_> {
+    fn kind(&self) -> ModelKind {
+        self.inner.kind()
+    }
+    fn runs(&self) -> &[FieldRun] {
+        &self.runs
+    }
+    fn groups(&self) -> &ReleaseGroups {
+        &self.groups
+    }
+    fn materials(&self) -> &[String] {
+        self.inner.materials()
+    }
+    fn release_height_m(&self, run: &FieldRun) -> f64 {
+        self.inner.release_height_m(run)
+    }
+    fn dominant_material(&self, region: &super::params::Region) -> String {
+        self.inner.dominant_material(region)
+    }
+    fn map_frame(&self) -> MapFrame {
+        self.inner.map_frame()
+    }
+    fn reading(&self) -> &Reading {
+        self.inner.reading()
+    }
+    fn read_impacts(&self, track: &[TrackPoint], noise_m: f64) -> Vec<super::impacts::Impact> {
+        self.inner.read_impacts(track, noise_m)
+    }
+    fn input_notes(&self) -> &[String] {
+        self.inner.input_notes()
+    }
+    fn measured_by_tracks(&self, which: &[usize]) -> Vec<super::measured::Measured> {
+        self.inner.measured_by_tracks(which)
+    }
+    fn prepare<'b>(&'b self, candidate: &Candidate) -> Result<Box<dyn Prepared + 'b>> {
+        self.inner.prepare(candidate)
+    }
+    fn scenario_files(
+        &self,
+        candidate: &Candidate,
+        repeats: usize,
+        seed: u64,
+        dir: &Path,
+    ) -> Result<Vec<(String, String)>> {
+        self.inner.scenario_files(candidate, repeats, seed, dir)
     }
 }
 

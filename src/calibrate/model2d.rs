@@ -9,7 +9,7 @@ use super::measured::{Measured, MIN_BOUNCES_MEASURED};
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Reading, Sim};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
 use super::rebound::{attach_tracks, rebound_meter, ReboundMeter};
-use super::runs::FieldRun;
+use super::runs::{FieldRun, ReleaseGroups};
 use super::scenario_file;
 use crate::campaign::{Campaign, TrackPoint};
 use crate::error::{Error, Result};
@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone)]
 pub struct Model2d {
     runs: Vec<FieldRun>,
-    group_names: Vec<String>,
+    groups: ReleaseGroups,
     profile: Profile,
     materials: Vec<String>,
     options: Options2d,
@@ -43,7 +43,7 @@ impl Model2d {
     pub fn new(
         campaign: &Campaign,
         runs: Vec<FieldRun>,
-        group_names: Vec<String>,
+        groups: ReleaseGroups,
         profile_file: &Path,
         cfg: &CalibrationConfig,
     ) -> Result<Model2d> {
@@ -51,7 +51,7 @@ impl Model2d {
         let (x0, x1) = profile.x_range_m();
         let ground = format!("the profile, whose x range is [{x0}, {x1}]");
         let high = campaign.check_release_points(|p| profile.z_at(p[0]).map(|z| p[2] - z), &ground)?;
-        let mut model = Self::from_parts(runs, group_names, profile, cfg.options2d.clone())?
+        let mut model = Self::from_parts(runs, groups, profile, cfg.options2d.clone())?
             .with_release_attempts(cfg.release_attempts)
             .with_rest_noise(cfg.rest_noise_m);
         campaign.check_rest_points(|p| (x0..=x1).contains(&p[0]), &ground)?;
@@ -63,7 +63,7 @@ impl Model2d {
     /// A model from a profile and options. For synthetic studies and tests.
     pub fn from_parts(
         runs: Vec<FieldRun>,
-        group_names: Vec<String>,
+        groups: ReleaseGroups,
         profile: Profile,
         options: Options2d,
     ) -> Result<Model2d> {
@@ -86,7 +86,7 @@ impl Model2d {
         }
         let materials = profile.material_names().to_vec();
         let reading = Reading::for_runs(&runs);
-        Ok(Model2d { runs, group_names, profile, materials, options, reading, files: None, notes: Vec::new() })
+        Ok(Model2d { runs, groups, profile, materials, options, reading, files: None, notes: Vec::new() })
     }
 
     /// The model measuring every simulated path's rebound height, or not (by default: if a run is tracked).
@@ -211,8 +211,8 @@ impl Model for Model2d {
         &self.runs
     }
 
-    fn group_names(&self) -> &[String] {
-        &self.group_names
+    fn groups(&self) -> &ReleaseGroups {
+        &self.groups
     }
 
     fn materials(&self) -> &[String] {
@@ -575,9 +575,14 @@ mod tests {
         let mut run = crate::calibrate::metrics::tests::run(0, 0, 1.0);
         run.release_m = [50.0, 0.0, ground + 10.0];
         run.rest_m = [51.0, 0.0, ground];
-        let model = Model2d::from_parts(vec![run.clone()], vec!["g".into()], profile, Options2d::default())
-            .unwrap()
-            .with_rebounds(true);
+        let model = Model2d::from_parts(
+            vec![run.clone()],
+            ReleaseGroups { names: vec!["g".into()], link_m: 0.0 },
+            profile,
+            Options2d::default(),
+        )
+        .unwrap()
+        .with_rebounds(true);
         let c =
             Candidate { params: material_params_2d("ground", [0.5, 0.0, 0.8, 0.0, 30.0, 0.0]), effects: Vec::new() };
         let sim = model.prepare(&c).unwrap().simulate(&run, 0, 1);
@@ -616,7 +621,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         write_profile_campaign(&spec, dir.path(), 0.0).unwrap();
         let profile_file = dir.path().join("profile.csv");
-        let (runs, groups) = (synth.runs().to_vec(), synth.group_names().to_vec());
+        let (runs, groups) = (synth.runs().to_vec(), synth.groups().clone());
         let campaign = Campaign::read(dir.path()).unwrap();
         let model = Model2d::new(&campaign, runs, groups, &profile_file, &CalibrationConfig::default()).unwrap();
         let mut c = truth_2d(&spec);

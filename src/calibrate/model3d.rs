@@ -8,7 +8,7 @@ use super::impacts::{read_impacts, tangential_restitutions_as_tracked};
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Reading, Sim};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
 use super::rebound::{attach_tracks, rebound_meter, ReboundMeter};
-use super::runs::FieldRun;
+use super::runs::{FieldRun, ReleaseGroups};
 use super::scenario_file;
 use crate::campaign::{Campaign, TrackPoint};
 use crate::error::{Error, Result};
@@ -27,7 +27,7 @@ use std::path::Path;
 #[derive(Debug, Clone)]
 pub struct Model3d {
     runs: Vec<FieldRun>,
-    group_names: Vec<String>,
+    groups: ReleaseGroups,
     materials: Vec<String>,
     terrain: Terrain,
     bodies: BTreeMap<String, RockBody>,
@@ -61,7 +61,7 @@ impl Model3d {
     pub fn new(
         campaign: &Campaign,
         runs: Vec<FieldRun>,
-        group_names: Vec<String>,
+        groups: ReleaseGroups,
         terrain_file: &Path,
         cfg: &CalibrationConfig,
         source: &str,
@@ -134,7 +134,7 @@ impl Model3d {
         for (id, block) in &campaign.blocks {
             bodies.insert(id.clone(), campaign.body(block)?);
         }
-        let mut model = Self::from_parts(runs, group_names, terrain, bodies, cfg.simulation.clone(), dem)?
+        let mut model = Self::from_parts(runs, groups, terrain, bodies, cfg.simulation.clone(), dem)?
             .with_release_attempts(cfg.release_attempts)
             .with_rest_noise(cfg.rest_noise_m);
         model.files = Some((campaign.dir.clone(), spec));
@@ -156,7 +156,7 @@ impl Model3d {
     /// id, and engine settings. For synthetic studies and tests.
     pub fn from_parts(
         runs: Vec<FieldRun>,
-        group_names: Vec<String>,
+        groups: ReleaseGroups,
         terrain: Terrain,
         bodies: BTreeMap<String, RockBody>,
         sim: SimParams,
@@ -185,19 +185,7 @@ impl Model3d {
         let median_mass_kg = masses.get(masses.len() / 2).copied().unwrap_or(100.0);
         let reading = Reading::for_runs(&runs);
         let notes = terrain.notes.clone();
-        Ok(Model3d {
-            runs,
-            group_names,
-            materials,
-            terrain,
-            bodies,
-            sim,
-            dem,
-            median_mass_kg,
-            reading,
-            files: None,
-            notes,
-        })
+        Ok(Model3d { runs, groups, materials, terrain, bodies, sim, dem, median_mass_kg, reading, files: None, notes })
     }
 
     /// The model with the tracked paths `tracks` (by run id, in the campaign's frame) attached: each tracked run gets
@@ -288,8 +276,8 @@ impl Model for Model3d {
         &self.runs
     }
 
-    fn group_names(&self) -> &[String] {
-        &self.group_names
+    fn groups(&self) -> &ReleaseGroups {
+        &self.groups
     }
 
     fn materials(&self) -> &[String] {
@@ -814,7 +802,7 @@ mod tests {
         // A model built from parts has no files to name: no scenario.
         let parts = Model3d::from_parts(
             Vec::new(),
-            Vec::new(),
+            ReleaseGroups { names: Vec::new(), link_m: 0.0 },
             model.terrain.clone(),
             BTreeMap::new(),
             SimParams::default(),

@@ -446,7 +446,7 @@ fn write_runs_csv(
                 "{},{set},{},{},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.3},{:.2}",
                 r.id,
                 r.block_id,
-                model.group_names()[r.group],
+                model.groups().names[r.group],
                 r.runout_m,
                 b.median_runout(),
                 b.runout_quantile(0.05),

@@ -83,9 +83,8 @@ impl FieldRun {
     }
 }
 
-/// The runs of a campaign that have an observed rest point, in file order, with their release groups; plus the
-/// group names (`block:k`).
-pub fn field_runs(campaign: &Campaign, group_link_m: f64) -> Result<(Vec<FieldRun>, Vec<String>)> {
+/// The runs of a campaign that have an observed rest point, in file order, with their release groups.
+pub fn field_runs(campaign: &Campaign, group_link_m: f64) -> Result<(Vec<FieldRun>, ReleaseGroups)> {
     let mut runs = Vec::new();
     for (index, r) in campaign.releases.iter().enumerate() {
         let Some(dep) = campaign.depositions.get(&r.trajectory_id) else { continue };
@@ -113,12 +112,40 @@ pub fn field_runs(campaign: &Campaign, group_link_m: f64) -> Result<(Vec<FieldRu
             "calibration needs at least 6 observed runs (and more to hold some out)",
         ));
     }
-    let names = assign_groups(&mut runs, group_link_m);
-    Ok((runs, names))
+    let groups = assign_groups(&mut runs, group_link_m);
+    Ok((runs, groups))
 }
 
-/// Single-linkage release groups within each block; returns the group names.
-pub fn assign_groups(runs: &mut [FieldRun], link_m: f64) -> Vec<String> {
+/// The release groups of a set of runs: their names (`block:k`, indexed by [`FieldRun::group`]) and the distance
+/// that linked them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReleaseGroups {
+    /// Group names, `block:k` with k counting within the block in order of first appearance.
+    pub names: Vec<String>,
+    /// Release points of one block within this distance of each other are linked, m (`group_link_m`).
+    pub link_m: f64,
+}
+
+/// Single-linkage release groups within each block; sets each run's group and returns the groups.
+pub fn assign_groups(runs: &mut [FieldRun], link_m: f64) -> ReleaseGroups {
+    let all: Vec<usize> = (0..runs.len()).collect();
+    link_groups(runs, &all, link_m)
+}
+
+/// The runs with the release groups a calibration on runs `cal` sees (ours): the calibration runs linked among
+/// themselves alone, so that no other run's release point (a held-out one) can chain two of their groups into
+/// one and change what the fit and the loop choose. Every other run joins the group of the nearest calibration
+/// run of its block within `link_m`, or else a group of its own, linked with the other such runs. With `cal` all
+/// runs these are [`assign_groups`]'s groups.
+pub fn calibration_groups(runs: &[FieldRun], cal: &[usize], link_m: f64) -> (Vec<FieldRun>, ReleaseGroups) {
+    let mut runs = runs.to_vec();
+    let groups = link_groups(&mut runs, cal, link_m);
+    (runs, groups)
+}
+
+/// Links the runs of `cal` within each block (single linkage at `link_m`), attaches every other run to its nearest
+/// linked run within `link_m`, and links the rest among themselves.
+fn link_groups(runs: &mut [FieldRun], cal: &[usize], link_m: f64) -> ReleaseGroups {
     let n = runs.len();
     let mut parent: Vec<usize> = (0..n).collect();
     fn find(p: &mut [usize], i: usize) -> usize {
@@ -134,39 +161,63 @@ pub fn assign_groups(runs: &mut [FieldRun], link_m: f64) -> Vec<String> {
         }
         r
     }
+    let distance =
+        |a: &FieldRun, b: &FieldRun| (a.release_m[0] - b.release_m[0]).hypot(a.release_m[1] - b.release_m[1]);
+    let linked = |a: &FieldRun, b: &FieldRun| a.block_id == b.block_id && distance(a, b) <= link_m;
+    let mut in_cal = vec![false; n];
+    for &i in cal {
+        in_cal[i] = true;
+    }
+    let union = |p: &mut [usize], i: usize, j: usize| {
+        let (a, b) = (find(p, i), find(p, j));
+        if a != b {
+            p[a.max(b)] = a.min(b);
+        }
+    };
     for i in 0..n {
         for j in i + 1..n {
-            if runs[i].block_id != runs[j].block_id {
-                continue;
-            }
-            let d = (runs[i].release_m[0] - runs[j].release_m[0]).hypot(runs[i].release_m[1] - runs[j].release_m[1]);
-            if d <= link_m {
-                let (a, b) = (find(&mut parent, i), find(&mut parent, j));
-                if a != b {
-                    parent[a.max(b)] = a.min(b);
-                }
+            if in_cal[i] && in_cal[j] && linked(&runs[i], &runs[j]) {
+                union(&mut parent, i, j);
             }
         }
     }
-    // Number groups in order of first appearance; name them block:k with k counting within the block.
+    // Each other run joins one calibration run at most, so no two calibration groups merge through it.
+    let mut alone = Vec::new();
+    for i in (0..n).filter(|&i| !in_cal[i]) {
+        let nearest = (0..n)
+            .filter(|&j| in_cal[j] && linked(&runs[i], &runs[j]))
+            .min_by(|&a, &b| distance(&runs[i], &runs[a]).total_cmp(&distance(&runs[i], &runs[b])));
+        match nearest {
+            Some(j) => union(&mut parent, i, j),
+            None => alone.push(i),
+        }
+    }
+    for (k, &i) in alone.iter().enumerate() {
+        for &j in &alone[k + 1..] {
+            if linked(&runs[i], &runs[j]) {
+                union(&mut parent, i, j);
+            }
+        }
+    }
+    // Numbered in order of first appearance among the calibration runs, then among the others, so that no other
+    // run shifts the calibration groups' numbers either (inner folds are dealt in group order).
     let mut root_to_group: BTreeMap<usize, usize> = BTreeMap::new();
     let mut names = Vec::new();
-    let mut per_block: BTreeMap<String, usize> = BTreeMap::new();
-    for (i, run) in runs.iter_mut().enumerate() {
+    let mut per_block: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut group = vec![0; n];
+    for i in (0..n).filter(|&i| in_cal[i]).chain((0..n).filter(|&i| !in_cal[i])) {
         let root = find(&mut parent, i);
-        let g = match root_to_group.get(&root) {
-            Some(&g) => g,
-            None => {
-                let k = per_block.entry(run.block_id.clone()).or_insert(0);
-                *k += 1;
-                names.push(format!("{}:{}", run.block_id, k));
-                root_to_group.insert(root, names.len() - 1);
-                names.len() - 1
-            }
-        };
+        group[i] = *root_to_group.entry(root).or_insert_with(|| {
+            let k = per_block.entry(&runs[i].block_id).or_insert(0);
+            *k += 1;
+            names.push(format!("{}:{}", runs[i].block_id, k));
+            names.len() - 1
+        });
+    }
+    for (run, g) in runs.iter_mut().zip(group) {
         run.group = g;
     }
-    names
+    ReleaseGroups { names, link_m }
 }
 
 /// True if two runs are the same record: same block, and release position, initial velocity and rest point
@@ -236,4 +287,59 @@ pub fn duplicate_runs(runs: &[FieldRun]) -> Vec<[String; 2]> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn released_at(x: &[f64]) -> Vec<FieldRun> {
+        x.iter()
+            .enumerate()
+            .map(|(i, &x)| FieldRun {
+                id: format!("r{i}"),
+                index: i,
+                block_id: "b".into(),
+                release_m: [x, 0.0, 0.0],
+                ..Default::default()
+            })
+            .collect()
+    }
+
+    fn groups_of(runs: &[FieldRun]) -> Vec<usize> {
+        runs.iter().map(|r| r.group).collect()
+    }
+
+    #[test]
+    fn a_held_out_release_point_does_not_chain_two_calibration_groups() {
+        // Releases at 0, 8 and 20 m with link 5 m; a held-out one at 4 m lies within 5 m of the first two.
+        let mut all = released_at(&[0.0, 8.0, 4.0, 20.0, 24.0, 40.0]);
+        let linked = assign_groups(&mut all, 5.0);
+        assert_eq!(groups_of(&all), vec![0, 0, 0, 1, 1, 2], "all runs together chain 0, 4 and 8 m");
+        assert_eq!(linked.names, vec!["b:1", "b:2", "b:3"]);
+        // Held out: the run at 4 m (nearest calibration run: 0 m, at 4 against 4 m: the first), the run at 24 m
+        // (joins 20 m) and the run at 40 m (alone).
+        let cal = [0, 1, 3];
+        let (runs, groups) = calibration_groups(&all, &cal, 5.0);
+        assert_eq!(groups_of(&runs), vec![0, 1, 0, 2, 2, 3]);
+        assert_eq!(groups.names, vec!["b:1", "b:2", "b:3", "b:4"]);
+        assert_eq!(groups.link_m, 5.0);
+        // Moving the held-out runs changes no calibration run's group.
+        let mut moved = all.clone();
+        moved[2].release_m[0] = 6.0;
+        moved[4].release_m[0] = 30.0;
+        let (runs_moved, _) = calibration_groups(&moved, &cal, 5.0);
+        assert!(cal.iter().all(|&i| runs_moved[i].group == runs[i].group));
+        assert_eq!(runs_moved[2].group, 1, "6 m is nearer 8 m than 0 m");
+        // The calibration groups are numbered first: held-out runs earlier in the file shift no number.
+        let (runs_late, _) = calibration_groups(&all, &[3, 4], 5.0);
+        assert_eq!(groups_of(&runs_late), vec![1, 1, 1, 0, 0, 2]);
+        // With every run calibrating, the groups are assign_groups's; another block never links.
+        let every: Vec<usize> = (0..all.len()).collect();
+        assert_eq!(groups_of(&calibration_groups(&all, &every, 5.0).0), groups_of(&all));
+        all[1].block_id = "c".into();
+        let g = assign_groups(&mut all, 5.0);
+        assert_eq!(groups_of(&all), vec![0, 1, 0, 2, 2, 3]);
+        assert_eq!(g.names, vec!["b:1", "c:1", "b:2", "b:3"]);
+    }
 }

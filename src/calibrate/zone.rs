@@ -21,7 +21,7 @@
 //! peak taken the same way (a band where the field stops rocks that the model lets through).
 
 use super::maps::{deposit, deposition_excess, empty_grid};
-use super::model::{MapFrame, Model, RunSims};
+use super::model::{MapFrame, Model, RunSims, WithRuns};
 use super::params::Region;
 use super::runs::FieldRun;
 use crate::random::{stream, uniform};
@@ -76,7 +76,7 @@ pub fn zone_check(model: &dyn Model, sims: &[RunSims], frame: &MapFrame, bootstr
             pseudo[s.run].rest_m = sim.rest_m;
             pseudo[s.run].runout_m = sim.runout_m;
         }
-        let null = NullModel { inner: model, runs: &pseudo };
+        let null = WithRuns::new(model, &pseudo[..], model.groups().clone());
         let f = deposition_excess(&null, sims, &g, frame.profile, density_range.clone());
         if extreme(&f).1 >= statistic - 1e-12 {
             hits += 1;
@@ -265,51 +265,6 @@ pub fn convex_hull(mut pts: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
     upper.pop();
     lower.extend(upper);
     lower
-}
-
-/// A model whose observed rest points are replaced (for the null draws); everything else is delegated.
-struct NullModel<'a> {
-    inner: &'a dyn Model,
-    runs: &'a [super::runs::FieldRun],
-}
-
-impl Model for NullModel<'_> {
-    fn kind(&self) -> super::config::ModelKind {
-        self.inner.kind()
-    }
-    fn runs(&self) -> &[super::runs::FieldRun] {
-        self.runs
-    }
-    fn group_names(&self) -> &[String] {
-        self.inner.group_names()
-    }
-    fn materials(&self) -> &[String] {
-        self.inner.materials()
-    }
-    fn release_height_m(&self, run: &super::runs::FieldRun) -> f64 {
-        self.inner.release_height_m(run)
-    }
-    fn dominant_material(&self, region: &Region) -> String {
-        self.inner.dominant_material(region)
-    }
-    fn map_frame(&self) -> MapFrame {
-        self.inner.map_frame()
-    }
-    fn reading(&self) -> &super::model::Reading {
-        self.inner.reading()
-    }
-    fn input_notes(&self) -> &[String] {
-        self.inner.input_notes()
-    }
-    fn prepare<'a>(
-        &'a self,
-        candidate: &super::params::Candidate,
-    ) -> crate::Result<Box<dyn super::model::Prepared + 'a>> {
-        self.inner.prepare(candidate)
-    }
-    fn read_impacts(&self, track: &[crate::campaign::TrackPoint], noise_m: f64) -> Vec<super::impacts::Impact> {
-        self.inner.read_impacts(track, noise_m)
-    }
 }
 
 #[cfg(test)]
