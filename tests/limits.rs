@@ -151,7 +151,10 @@ fn more_rocks_than_a_run_can_hold_are_refused() {
     refused(&["benches", "--runs-2dlm", "4294967297", "--out", "out"], dir.path(), &["lumped2d.runs", "limit"]);
     // A bench height no pit has is named as such (it overflowed the mesh count, blamed on max_edge_m).
     let tall = ["benches", "--bench-height-m", "1e308", "--runs-3drb", "0", "--out", "out"];
-    refused(&tall, dir.path(), &["bench_height_m", "up to 10000"]);
+    refused(&tall, dir.path(), &["study: bench_height_m", "up to 10000"]);
+    // Named by the study's key, not the generated geometry's (it said geometry.bench_width_m).
+    let wide = ["benches", "--bench-widths-m", "8,20000", "--runs-3drb", "0", "--out", "out"];
+    refused(&wide, dir.path(), &["study: bench_widths_m[1]", "20000 is not 0 to 10,000 metres"]);
     let campaign = shipped("examples/profile_campaign");
     let profile_csv = campaign.join("profile.csv");
     let (campaign, profile_csv) = (campaign.to_str().unwrap(), profile_csv.to_str().unwrap());

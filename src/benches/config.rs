@@ -53,6 +53,7 @@ use crate::lumped2d::{Material2d, MaterialSpec as MaterialSpec2d, Options2d};
 use crate::rock::{ShapeKind, DEFAULT_DENSITY_KG_M3};
 use crate::scenario::MaterialSpec as MaterialSpec3d;
 use crate::sim::SimParams;
+use crate::terrain::bench::MAX_LENGTH_M;
 use crate::terrain::{BenchGeometry, Material};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -337,13 +338,26 @@ impl StudyConfig {
                 Err(Error::invalid(name, format!("must be 0 or more, got {v}"), hint))
             }
         };
-        positive("bench_height_m", self.bench_height_m, "e.g. bench_height_m = 20")?;
+        // The two keys the geometry has under other names are checked here against its limits, so an error names
+        // the key (or flag) the user gave.
+        if !(self.bench_height_m > 0.0 && self.bench_height_m <= MAX_LENGTH_M) {
+            return Err(Error::invalid(
+                "bench_height_m",
+                format!("must be a positive number of metres up to {MAX_LENGTH_M}, got {}", self.bench_height_m),
+                "e.g. bench_height_m = 20",
+            ));
+        }
         crate::parallel::check_threads("threads", self.threads)?;
         if self.n_benches == 0 {
             return Err(Error::invalid("n_benches", "must be at least 1", "give 1 or more benches, e.g. 5"));
         }
         check_list("face_angles_deg", &self.face_angles_deg, |a| a > 1.0 && a < 89.9, "between 1 and 89.9 degrees")?;
-        check_list("bench_widths_m", &self.bench_widths_m, |w| w >= 0.0, "0 or more metres")?;
+        check_list(
+            "bench_widths_m",
+            &self.bench_widths_m,
+            |w| (0.0..=MAX_LENGTH_M).contains(&w),
+            "0 to 10,000 metres",
+        )?;
         check_list("masses_kg", &self.masses_kg, |m| m > 0.0, "positive masses in kg")?;
         if self.repeats == 0 {
             return Err(Error::invalid("repeats", "must be at least 1", "give 1 or more repeats (5 pools five seeds)"));

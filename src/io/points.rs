@@ -39,11 +39,15 @@ pub fn read_points(path: &Path) -> Result<Vec<[f64; 3]>> {
         }
         let mut p = [0.0; 3];
         for (k, f) in fields.iter().enumerate() {
-            p[k] = f.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
+            p[k] = f.parse::<f64>().ok().filter(|&v| crate::io::coordinate_ok(v)).ok_or_else(|| {
                 Error::at_line(
                     path,
                     line_no,
-                    format!("{} = '{f}' is not a finite number", ["x", "y", "z"][k]),
+                    format!(
+                        "{} = '{f}' is not a finite number within ±{:e} m",
+                        ["x", "y", "z"][k],
+                        crate::io::MAX_COORDINATE_M
+                    ),
                     "write one point per line as `x y z` or `x,y,z`",
                 )
             })?;
@@ -102,6 +106,9 @@ mod tests {
         let (_d, p) = write("r.xyz", "0 0 0\n1 0 0\n0 y 0\n0 0 1\n");
         let err = read_points(&p).unwrap_err().to_string();
         assert!(err.contains("r.xyz:3") && err.contains("y = 'y'"), "{err}");
+        let (_d, p) = write("r.xyz", "0 0 0\n1 0 0\n0 1 0\n0 0 1e300\n");
+        let err = read_points(&p).unwrap_err().to_string();
+        assert!(err.contains("r.xyz:4") && err.contains("z = '1e300' is not a finite number within ±1e9 m"), "{err}");
         let (_d, p) = write("r.xyz", "0 0 0\n1 0 0\n0 1 0\n");
         let err = read_points(&p).unwrap_err().to_string();
         assert!(err.contains("at least 4 points, found 3"), "{err}");
