@@ -6,6 +6,7 @@
 use crate::error::{Error, Result};
 use crate::io::csv_text::{Row, Table};
 use crate::rock::{RockBody, RockSize, ShapeKind};
+use crate::scenario::MAX_ROCK_MASS_KG;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -379,10 +380,25 @@ fn read_blocks(path: &Path) -> Result<BTreeMap<String, Block>> {
         if block.mass_kg <= 0.0 || block.size_m.iter().any(|&s| s <= 0.0) {
             return Err(blk.error(row, "mass and sizes must be positive", "fix the block's mass_kg and size_*_m"));
         }
+        if block.mass_kg > MAX_ROCK_MASS_KG || block.size_m.iter().any(|&s| s > MAX_BLOCK_SIZE_M) {
+            return Err(blk.error(
+                row,
+                format!(
+                    "block '{}' of {} kg and {:?} m is larger than the largest block talus takes ({MAX_ROCK_MASS_KG} \
+                     kg, {MAX_BLOCK_SIZE_M} m a side)",
+                    block.block_id, block.mass_kg, block.size_m
+                ),
+                "give the block's mass in kg and its sizes in metres (sizes in millimetres read 1000 times too large)",
+            ));
+        }
         blocks.insert(block.block_id.clone(), block);
     }
     Ok(blocks)
 }
+
+/// The largest side of a campaign block, m (ours: past any rockfall block, so that sizes in millimetres are caught;
+/// 10¹⁵ m was read).
+pub const MAX_BLOCK_SIZE_M: f64 = 100.0;
 
 /// Reads the rest points of `observed_deposition.csv` at `path` (none if the file does not exist), by run id, for
 /// the `releases` of a campaign on `ground`.

@@ -117,6 +117,18 @@ fn a_repeated_rest_point_or_block_is_refused_naming_both_lines() {
 }
 
 #[test]
+fn a_block_larger_than_any_rockfall_block_is_refused_at_its_line() {
+    for (row, what) in
+        [("b1,50,300,300,300", "[300.0, 300.0, 300.0] m"), ("b1,1e15,0.3,0.3,0.3", "1000000000000000 kg")]
+    {
+        let d = campaign(RELEASE_2D, DEPOSITION_2D, &format!("block_id,mass_kg,size_x_m,size_y_m,size_z_m\n{row}\n"));
+        let e = error_on(&d, Ground::Profile);
+        assert!(e.contains("block_metadata.csv:2") && e.contains(what) && e.contains("largest block"), "{e}");
+        assert!(e.contains("sizes in millimetres"), "{e}");
+    }
+}
+
+#[test]
 fn a_release_file_without_a_velocity_column_is_refused() {
     for (column, ground) in [("vx_mps", Ground::Profile), ("vz_mps", Ground::Profile), ("vy_mps", Ground::Terrain)] {
         let release = if ground == Ground::Profile { RELEASE_2D } else { RELEASE_3D };
