@@ -5,7 +5,8 @@
 //! `group_link_m` (single linkage). A group is what the field calls "repeated runs from one release point": at
 //! Tschamut each block was released again and again from one small area (data.md), which gives one group per block.
 //! The scatter floor and the group-wise objective compare a run only with its repeats, because runs of other blocks
-//! or from elsewhere are not repeats of it.
+//! or from elsewhere are not repeats of it. A calibration links its calibration runs alone
+//! ([`calibration_groups`]), so that a held-out release point cannot chain two of their groups.
 
 use super::model::RunSims;
 use crate::campaign::Campaign;
