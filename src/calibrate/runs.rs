@@ -121,7 +121,8 @@ pub fn field_runs(campaign: &Campaign, group_link_m: f64) -> Result<(Vec<FieldRu
 /// that linked them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReleaseGroups {
-    /// Group names, `block:k` with k counting within the block in order of first appearance.
+    /// Group names, `block:k` with k counting within the block in order of first appearance (a calibration's
+    /// groups: among its calibration runs first, [`calibration_groups`]).
     pub names: Vec<String>,
     /// Release points of one block within this distance of each other are linked, m (`group_link_m`).
     pub link_m: f64,
