@@ -164,7 +164,7 @@ const STATS_BINS: LogBins = LogBins { min: 1e-3, per_decade: 1000, n: 10_000 };
 
 /// [`Stats`] of a quantity accumulated rock by rock in memory that does not grow with the run: the values of the
 /// first [`EXACT_STATS_ROCKS`] rocks are kept and give exact percentiles; past them the percentiles are read from
-/// log-spaced bins ([`STATS_BINS`]) and the smallest, largest and mean stay exact.
+/// log-spaced bins (1,000 a decade from 10⁻³ to 10⁷) and the smallest, largest and mean stay exact.
 #[derive(Debug, Clone)]
 pub struct StatsAccumulator {
     values: Vec<f64>,
