@@ -83,20 +83,23 @@ fn cube_dropped_flat_rebounds_with_cr_times_impact_speed_and_no_spin() {
     let r = rock(ShapeKind::Cube, 2650.0); // 1 m cube
     let drop_m = 2.0;
     let start = at_rest(Vector3::new(20.3, 20.1, 0.5 + drop_m), UnitQuaternion::identity());
-    let mut rec = Record::default();
-    let params = SimParams { max_time_s: 1.5, ..Default::default() };
-    simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut rec);
-    let first = rec.impacts.first().expect("an impact");
-    let v_in = (2.0 * GRAVITY_MPS2 * drop_m).sqrt();
-    assert_relative_eq!(first.approach_speed_mps, v_in, max_relative = 0.01);
-    // After the impact and before the next one: a free rise whose apex gives the rebound speed.
-    let rising = rec.rebound().expect("rising");
-    let v_out = (rising.velocity_mps.z.powi(2) + 2.0 * GRAVITY_MPS2 * rising.clearance_m).sqrt();
-    let apex_clearance = rising.clearance_m + rising.velocity_mps.z.powi(2) / (2.0 * GRAVITY_MPS2);
-    assert_relative_eq!(v_out, cr * v_in, max_relative = 0.01);
-    assert_relative_eq!(apex_clearance, cr * cr * drop_m, max_relative = 0.02);
-    assert!(rising.spin_radps < 1e-6, "spin {}", rising.spin_radps);
-    assert!(rising.velocity_mps.x.abs() < 1e-5 && rising.velocity_mps.y.abs() < 1e-5);
+    // Also with the impact step divided (`impact_substeps`): the closed form holds as it is resolved.
+    for impact_substeps in [1, 8] {
+        let mut rec = Record::default();
+        let params = SimParams { max_time_s: 1.5, impact_substeps, ..Default::default() };
+        simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut rec);
+        let first = rec.impacts.first().expect("an impact");
+        let v_in = (2.0 * GRAVITY_MPS2 * drop_m).sqrt();
+        assert_relative_eq!(first.approach_speed_mps, v_in, max_relative = 0.01);
+        // After the impact and before the next one: a free rise whose apex gives the rebound speed.
+        let rising = rec.rebound().expect("rising");
+        let v_out = (rising.velocity_mps.z.powi(2) + 2.0 * GRAVITY_MPS2 * rising.clearance_m).sqrt();
+        let apex_clearance = rising.clearance_m + rising.velocity_mps.z.powi(2) / (2.0 * GRAVITY_MPS2);
+        assert_relative_eq!(v_out, cr * v_in, max_relative = 0.01);
+        assert_relative_eq!(apex_clearance, cr * cr * drop_m, max_relative = 0.02);
+        assert!(rising.spin_radps < 1e-6, "spin {}", rising.spin_radps);
+        assert!(rising.velocity_mps.x.abs() < 1e-5 && rising.velocity_mps.y.abs() < 1e-5);
+    }
 }
 
 /// A plane rising toward −x at `slope_deg`, so that "downslope" is +x.
@@ -405,24 +408,32 @@ fn ball(mass_kg: f64) -> RockBody {
 
 #[test]
 fn a_drag_acts_for_the_contacts_duration_whatever_the_time_step() {
-    // The solver resolves an impact in one step; a drag in contact then acts for `contact_duration_s` (2 ms), not
-    // for one step: a cube dropped flat with Cr 0.5 onto soft ground of drag c leaves with Cr·v·exp(−c·2 ms) at steps
-    // of 2, 1 and 0.5 ms alike, and rises to Cr²·h·exp(−2c·2 ms) (a drag per step would give exp(−c·dt)).
+    // The solver resolves an impact in one step; a drag in contact then acts for `contact_duration_s` (2 ms) after
+    // the last step in contact, not for one step: a cube dropped flat with Cr 0.5 onto soft ground of drag c leaves
+    // with Cr·v·exp(−c·2 ms) at steps of 2, 1, 0.5 and 0.25 ms alike, and rises to Cr²·h·exp(−2c·2 ms) (a drag per
+    // step would give exp(−c·dt)).
     let (cr, c, drop_m) = (0.5, 50.0, 2.0);
     let terrain =
         Terrain::from_function(40.0, 8, Material { drag_per_s: c, ..material(cr, 40.0, 30.0) }, |_, _| 0.0).unwrap();
     let r = rock(ShapeKind::Cube, 2650.0); // 1 m cube
     let start = at_rest(Vector3::new(20.3, 20.1, 0.5 + drop_m), UnitQuaternion::identity());
     let duration_s = SimParams::default().contact_duration_s;
-    for dt_s in [0.002, 0.001, 0.0005] {
+    let want = cr * cr * drop_m * (-2.0 * c * duration_s).exp();
+    let apex = |dt_s, impact_substeps| {
         let mut rec = Record::default();
-        let params = SimParams { dt_s, max_time_s: 1.5, ..Default::default() };
+        let params = SimParams { dt_s, impact_substeps, max_time_s: 1.5, ..Default::default() };
         simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut rec);
         let rising = rec.rebound().expect("rising");
-        let apex_clearance = rising.clearance_m + rising.velocity_mps.z.powi(2) / (2.0 * GRAVITY_MPS2);
-        let want = cr * cr * drop_m * (-2.0 * c * duration_s).exp();
-        assert_relative_eq!(apex_clearance, want, max_relative = 0.02);
+        rising.clearance_m + rising.velocity_mps.z.powi(2) / (2.0 * GRAVITY_MPS2)
+    };
+    for dt_s in [0.002, 0.001, 0.0005, 0.00025] {
+        assert_relative_eq!(apex(dt_s, 1), want, max_relative = 0.02);
     }
+    // With the impact step in 8 sub-steps of 0.25 ms the cube is still below the ground for a second sub-step
+    // after its impact here (as at a plain step of 0.25 ms with another phase of the crossing), and the drag acts
+    // from there: 2 ms and one sub-step, no more.
+    let (a, sub_s) = (apex(0.002, 8), 0.002 / 8.0);
+    assert!(a <= want * 1.001 && a >= want * (-2.0 * c * sub_s).exp() * 0.999, "{a} against {want}");
 }
 
 #[test]
@@ -468,10 +479,15 @@ fn no_impact_adds_energy_and_no_rock_ends_below_the_surface() {
         drag_per_s: 0.0,
     };
     let terrain = rough_slope(m);
-    let params = SimParams { cr_draw: talus::sim::CrDraw::PerImpact, max_time_s: 30.0, ..Default::default() };
     let shapes = [ShapeKind::Cube, ShapeKind::FlatBox, ShapeKind::Smartie];
     let mut total_impacts = 0;
-    for i in 0..12u64 {
+    for (i, impact_substeps) in (0..12u64).flat_map(|i| [(i, 1), (i, 8)]) {
+        let params = SimParams {
+            cr_draw: talus::sim::CrDraw::PerImpact,
+            max_time_s: 30.0,
+            impact_substeps,
+            ..Default::default()
+        };
         let mut rng = stream(5, i);
         let r = rock(shapes[i as usize % 3].clone(), [50.0, 800.0, 5000.0][(i as usize / 3) % 3]);
         let q = talus::rock::random_orientation(&mut rng);
@@ -544,4 +560,12 @@ fn no_tunnelling_through_a_thin_wall_at_40_mps() {
             out.final_state.position_m
         );
     }
+}
+
+#[test]
+fn impact_substeps_change_nothing_without_an_impact() {
+    // A box set sliding on an incline touches the ground with every step but never newly meets it faster than the
+    // bounce threshold: no step is divided, and the path is the same to the bit.
+    let params = |n| SimParams { impact_substeps: n, ..SimParams::default() };
+    assert_eq!(slide(30.0, 40.0, 35.0, &params(1)), slide(30.0, 40.0, 35.0, &params(8)));
 }

@@ -2,7 +2,10 @@
 //!
 //! Near the ground, each step of `dt_s` is a Moreau midpoint step (Leine et al. 2014, physics.md §1.2 and §6):
 //! move half a step, find the contacts there, solve the impulses together ([`super::contact`]), move the second half
-//! with the new velocities. Rotation between contacts follows the implicit midpoint rule ([`super::body`]).
+//! with the new velocities. With `impact_substeps` above 1, a step in which a hull vertex newly meets the ground
+//! faster than the bounce threshold is taken as that many Moreau steps (ours: at 2 ms a rock hopping over uneven
+//! ground otherwise runs too far; README, "Performance and convergence"). Rotation between contacts follows the
+//! implicit midpoint rule ([`super::body`]).
 //! Clear of the ground, the rock moves in long exact ballistic steps: a step is taken only if the bounding sphere,
 //! swept along the parabola, stays above an upper bound of the ground under it (conservative advancement,
 //! physics.md §6), so nothing is tunnelled through however fast the rock goes.
@@ -229,9 +232,9 @@ struct Run<'a> {
     touch_left: Vec<u32>,
     /// Per hull vertex: the restitution drawn at its last touch (kept while it counts as touching).
     vertex_cr: Vec<f64>,
-    /// Steps what acts in contact still acts after the last touch, and the contact's averaged normal and drag rate
-    /// (1/s) it acts with.
-    brake_left: u32,
+    /// How long what acts in contact still acts after the last touch, s, and the contact's averaged normal and drag
+    /// rate (1/s) it acts with.
+    brake_left_s: f64,
     brake_at: (Vector3<f64>, f64),
     barrier_met: Vec<bool>,
     /// Soft-ground drag rate of each material, 1/s: its own, or the `soft_drag_per_s` effect's where that acts.
@@ -300,7 +303,7 @@ impl<'a> Run<'a> {
             touch_steps: ((params.contact_duration_s / params.dt_s).round() as u32).max(1),
             touch_left: vec![0; rock.vertices_m.len()],
             vertex_cr: vec![0.0; rock.vertices_m.len()],
-            brake_left: 0,
+            brake_left_s: 0.0,
             brake_at: (Vector3::z(), 0.0),
             barrier_met: vec![false; terrain.barriers.len()],
             drag_per_s: terrain
@@ -404,7 +407,7 @@ impl<'a> Run<'a> {
         // A flight ends any contact (a rock is clear of the ground only steps after its last touch, so with the
         // default contact duration nothing counts as touching here already).
         self.touch_left.fill(0);
-        self.brake_left = 0;
+        self.brake_left_s = 0.0;
         let (x0, v0) = (self.s.position_m, self.s.velocity_mps);
         let horizontal = (v0.x * v0.x + v0.y * v0.y).sqrt() * h;
         let pieces =
@@ -492,9 +495,47 @@ impl<'a> Run<'a> {
         BarrierEffect::Slowed
     }
 
-    /// One Moreau midpoint step near the ground. Returns whether there was a contact.
+    /// One step of `dt_s` near the ground, taken as `impact_substeps` Moreau steps when an impact lies ahead in it
+    /// (ours: the motion between impacts keeps `dt_s`). A touch counts as a contact for whole steps of `dt_s` (the
+    /// counters move once a step). Returns whether there was a contact.
     fn contact_step(&mut self, observer: &mut impl Observer) -> bool {
         let h = self.params.dt_s;
+        let n = self.params.impact_substeps;
+        let in_contact = if n > 1 && self.impact_ahead(h) {
+            (0..n).fold(false, |any, _| self.moreau_step(observer, h / n as f64) | any)
+        } else {
+            self.moreau_step(observer, h)
+        };
+        for t in self.touch_left.iter_mut() {
+            *t = t.saturating_sub(1);
+        }
+        in_contact
+    }
+
+    /// Whether a hull vertex that does not count as touching lies below the ground at the end pose of a free step
+    /// of `h` and approaches it (along the untilted normal) faster than the bounce threshold. The end pose, not
+    /// the midpoint one the step detects contacts at: a vertex that crosses the ground in the step's second half
+    /// would otherwise be met below it by the next step, and resolved late.
+    fn impact_ahead(&self, h: f64) -> bool {
+        let x = self.s.position_m + self.s.velocity_mps * h;
+        let surface = &self.terrain.surface;
+        let r = self.rock.bounding_radius_m;
+        if x.z - r > surface.max_height_in(x.x - r, x.x + r, x.y - r, x.y + r) {
+            return false;
+        }
+        let rot = rotate(&self.s.orientation, &self.s.omega_body_radps, h).to_rotation_matrix();
+        let w = self.s.orientation * self.s.omega_body_radps;
+        self.rock.vertices_m.iter().enumerate().any(|(i, b)| {
+            let arm = rot * b;
+            self.touch_left[i] == 0
+                && surface.penetration(&(x + arm)).is_some_and(|(_, normal, _)| {
+                    -(self.s.velocity_mps + w.cross(&arm)).dot(&normal) > self.params.bounce_threshold_mps
+                })
+        })
+    }
+
+    /// One Moreau midpoint step of `h` near the ground. Returns whether there was a contact.
+    fn moreau_step(&mut self, observer: &mut impl Observer, h: f64) -> bool {
         let rock = self.rock;
         let before = Velocities { linear_mps: self.s.velocity_mps, angular_body_radps: self.s.omega_body_radps };
         let x_mid = self.s.position_m + self.s.velocity_mps * (0.5 * h);
@@ -541,11 +582,9 @@ impl<'a> Run<'a> {
                 });
             }
         }
-        for t in self.touch_left.iter_mut() {
-            *t = t.saturating_sub(1);
-        }
         for c in &self.contacts {
-            self.touch_left[c.vertex] = self.touch_steps;
+            // One more than the contact's steps: `contact_step` takes one off at the end of the step.
+            self.touch_left[c.vertex] = self.touch_steps + 1;
             self.vertex_cr[c.vertex] = c.cr_drawn;
         }
         if in_contact {
@@ -560,12 +599,14 @@ impl<'a> Run<'a> {
                 .map(|k| self.drag_per_s[self.terrain.triangle_material[k.triangle as usize] as usize])
                 .fold(0.0, f64::max);
             self.brake_at = (normal, drag);
-            self.brake_left = self.touch_steps;
+            self.brake_left_s = self.params.contact_duration_s;
         }
-        let braking = self.brake_left > 0;
+        // Acting for the rest of the contact's duration only (all of `h` but in the step that ends it).
+        let braking = self.brake_left_s > 1e-12;
         if braking {
-            self.brake(&mut after, h);
-            self.brake_left -= 1;
+            let d = h.min(self.brake_left_s);
+            self.brake(&mut after, d);
+            self.brake_left_s -= d;
         }
         self.s.velocity_mps = after.linear_mps;
         self.s.omega_body_radps = after.angular_body_radps;
