@@ -518,20 +518,34 @@ impl<'a> Run<'a> {
     /// would otherwise be met below it by the next step, and resolved late.
     fn impact_ahead(&self, h: f64) -> bool {
         let x = self.s.position_m + self.s.velocity_mps * h;
-        let surface = &self.terrain.surface;
-        let r = self.rock.bounding_radius_m;
-        if x.z - r > surface.max_height_in(x.x - r, x.x + r, x.y - r, x.y + r) {
-            return false;
-        }
+        let Some(top) = self.ground_top_under(&x) else { return false };
         let rot = rotate(&self.s.orientation, &self.s.omega_body_radps, h).to_rotation_matrix();
         let w = self.s.orientation * self.s.omega_body_radps;
         self.rock.vertices_m.iter().enumerate().any(|(i, b)| {
             let arm = rot * b;
             self.touch_left[i] == 0
-                && surface.penetration(&(x + arm)).is_some_and(|(_, normal, _)| {
+                && self.vertex_penetration(&(x + arm), top).is_some_and(|(_, normal, _)| {
                     -(self.s.velocity_mps + w.cross(&arm)).dot(&normal) > self.params.bounce_threshold_mps
                 })
         })
+    }
+
+    /// The highest ground under the bounding sphere of the rock centred at `x`, or `None` when the sphere is clear
+    /// of it (no vertex can touch).
+    fn ground_top_under(&self, x: &Vector3<f64>) -> Option<f64> {
+        let r = self.rock.bounding_radius_m;
+        let top = self.terrain.surface.max_height_in(x.x - r, x.x + r, x.y - r, x.y + r);
+        (x.z - r <= top).then_some(top)
+    }
+
+    /// Depth, normal and triangle of the ground at the world point `p` if it lies below it, after the cheap
+    /// rejections against `top` ([`Run::ground_top_under`]) and the highest point of its bin.
+    fn vertex_penetration(&self, p: &Vector3<f64>, top: f64) -> Option<(f64, Vector3<f64>, u32)> {
+        let surface = &self.terrain.surface;
+        if p.z > top || p.z > surface.bin_max_height(p.x, p.y) {
+            return None;
+        }
+        surface.penetration(p)
     }
 
     /// One Moreau midpoint step of `h` near the ground. Returns whether there was a contact.
@@ -685,22 +699,14 @@ impl<'a> Run<'a> {
     /// a new contact with the roughness effect on, a tilted normal.
     fn detect(&mut self, x: &Vector3<f64>, q: &UnitQuaternion<f64>) {
         self.contacts.clear();
-        let surface = &self.terrain.surface;
-        let r = self.rock.bounding_radius_m;
-        let top = surface.max_height_in(x.x - r, x.x + r, x.y - r, x.y + r);
-        if x.z - r > top {
-            return;
-        }
+        let Some(top) = self.ground_top_under(x) else { return };
         let rot = q.to_rotation_matrix();
         let effects = &self.params.effects;
         let v = self.s.velocity_mps;
         let w = self.s.orientation * self.s.omega_body_radps;
         for (i, b) in self.rock.vertices_m.iter().enumerate() {
             let p = x + rot * b;
-            if p.z > top || p.z > surface.bin_max_height(p.x, p.y) {
-                continue;
-            }
-            let Some((depth, mut normal, triangle)) = surface.penetration(&p) else { continue };
+            let Some((depth, mut normal, triangle)) = self.vertex_penetration(&p, top) else { continue };
             let m = self.terrain.triangle_material[triangle as usize] as usize;
             let (mut mu_static, mut mu_dynamic) = self.friction[m];
             if effects.slip_friction_max_deg.is_some() {
