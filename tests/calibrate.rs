@@ -663,9 +663,12 @@ fn profile_loop_adds_nothing_without_a_hidden_effect() {
 /// The 3DRB effects loop on the study's `zone` and `control_c` cases at half their runs (36), with the small
 /// settings of [`tiny_3d`] and 4 repeats in the search and the screening (the full study: `cargo run --release
 /// --example calibration_study -- zone control_c*`, docs/calibration.md). About 70 and 50 s in release on 2 cores.
+/// The engine is the study's: `impact_substeps = 1`, the default until 2026-11-27. At the default 8 the small
+/// search's baseline (12 evaluations) absorbs part of the hidden zone (residual against release y: ρ 0.38, p = 0.04,
+/// against 0.75, p = 0.005) and the zone check no longer proposes it; the study at 8 sub-steps is not yet re-run.
 fn rigid_body_loop(name: &str) -> talus::calibrate::report::Report {
     let spec = Synthetic3d { runs_per_group: 3, ..case_3d(name, 1).unwrap() };
-    let model = synthetic_3d(&spec, SimParams::default()).unwrap();
+    let model = synthetic_3d(&spec, SimParams { impact_substeps: 1, ..SimParams::default() }).unwrap();
     let mut cfg = CalibrationConfig { search_repeats: 4, ..tiny_3d() };
     cfg.effects.screen_repeats = Some(4);
     cfg.back_analysis.enabled = false;
@@ -1009,7 +1012,7 @@ fn a_3drb_calibration_warns_of_what_its_terrain_does_not_use() {
     // The command on a small synthetic campaign as files, with two folds.
     let spec = Synthetic3d { runs_per_group: 2, release_points: 2, masses_kg: vec![50.0, 400.0], ..Default::default() };
     let campaign = dir.path().join("campaign");
-    talus::calibrate::synthetic::write_terrain_campaign(&spec, &campaign, 0.0).unwrap();
+    talus::calibrate::synthetic::write_terrain_campaign(&spec, &campaign, 0.0, &SimParams::default()).unwrap();
     let settings = dir.path().join("cal.toml");
     std::fs::write(
         &settings,
@@ -1103,9 +1106,10 @@ fn a_slow_release_that_stalls_in_part_under_high_static_friction_is_reported_as_
 
 #[test]
 fn released_again_a_slow_release_runs_and_a_release_that_cannot_start_stays() {
-    // v083 under static friction 57° stalls in a quarter or more of its simulations (test above); with
-    // `release_attempts = 10` each stalled one is released again with fresh numbers and runs, and the ones that ran
-    // the first time are unchanged. v086 (0.02 m/s on the 13° release bench) stalls on every release and stays
+    // v083 under static friction 57° stalls in a quarter or more of its simulations (test above: 18 of 20 with the
+    // default 8 impact sub-steps, 14 of 20 without); with `release_attempts = 30` each stalled one is released again
+    // with fresh numbers and runs (at 0.9 a release, 10 attempts leave 3 of 20 stalled), and the ones that ran the
+    // first time are unchanged. v086 (0.02 m/s on the 13° release bench) stalls on every release and stays
     // reported as not started.
     use talus::calibrate::model::evaluate;
     use talus::calibrate::runs::{runs_not_started, stalled_share};
@@ -1115,7 +1119,7 @@ fn released_again_a_slow_release_runs_and_a_release_that_cannot_start_stays() {
         ..Default::default()
     };
     let once = tschamut();
-    let again = tschamut_with(&CalibrationConfig { release_attempts: 10, ..Default::default() });
+    let again = tschamut_with(&CalibrationConfig { release_attempts: 30, ..Default::default() });
     let runs = once.runs();
     let which: Vec<usize> = ["v083", "v086"].iter().map(|id| runs.iter().position(|r| &r.id == id).unwrap()).collect();
     let plain = evaluate(once.as_ref(), &c, &which, 20, 1, 0).unwrap();
@@ -1149,8 +1153,9 @@ fn bounces_read_from_exact_tracks_give_back_the_restitution_of_the_model_that_ma
     }
     // 3DRB: rounded boulders of Cr 0.6 (`control_a`, 72 runs), exact tracks. A rigid body's centre bounces off at
     // Cr only when the impulse passes through it: the fast impacts (normal speed 8 m/s and more, the drops) come
-    // back at a median 0.58; slow ones, where spin turns into a hop off the hull's facets, at about 1 (ours,
-    // measured: 0.965 for 1-3 m/s). So on rigid bodies the apparent restitution falls with impact speed even when Cr
+    // back below it, at a median 0.54 (0.58 without impact sub-steps, where a landing's vertices meet the ground in
+    // one 2 ms step); slow ones, where spin turns into a hop off the hull's facets, at about 1 (ours, measured:
+    // 0.965 for 1-3 m/s). So on rigid bodies the apparent restitution falls with impact speed even when Cr
     // does not: compare tracks with simulated tracks, not with Cr.
     let spec =
         Synthetic3d { track_noise_m: Some(0.0), ..talus::calibrate::synthetic::case_3d("control_a", 1).unwrap() };
@@ -1165,7 +1170,7 @@ fn bounces_read_from_exact_tracks_give_back_the_restitution_of_the_model_that_ma
         talus::calibrate::impacts::summarise(&sel, 1).unwrap().normal_restitution_median.unwrap()
     };
     let (fast, slow) = (median_between(8.0, 100.0), median_between(1.0, 3.0));
-    assert!((fast - 0.6).abs() < 0.05 && slow > 0.8, "fast {fast}, slow {slow}");
+    assert!((0.45..0.6).contains(&fast) && slow > 0.8, "fast {fast}, slow {slow}");
 }
 
 #[test]

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 use talus::calibrate::{open_model, CalibrationConfig, ModelKind};
 use talus::campaign::{Campaign, Ground};
+use talus::sim::SimParams;
 use tempfile::TempDir;
 
 const RELEASE_2D: &str = "trajectory_id,x_m,z_m,vx_mps,vz_mps,block_id\n\
@@ -240,13 +241,13 @@ fn the_shipped_and_written_campaigns_still_read() {
     assert!(rests.lines().any(|l| l.starts_with("p046,200,")), "{rests}");
     let dir = tempfile::tempdir().unwrap();
     let spec = talus::calibrate::synthetic::Synthetic3d { runs_per_group: 2, ..case_3d("speed", 1).unwrap() };
-    write_terrain_campaign(&spec, dir.path(), 0.0).unwrap();
+    write_terrain_campaign(&spec, dir.path(), 0.0, &SimParams::default()).unwrap();
     open_model(dir.path(), &dir.path().join("terrain.obj"), ModelKind::Rigid3d, &cfg, "settings").unwrap();
     // Rocks that leave the terrain (control_c's plain ends at x 160 m; size's noise puts run s050 at x −0.56 m):
     // written at the edge, so that the campaign opens.
     for case in ["control_c", "size"] {
         let dir = tempfile::tempdir().unwrap();
-        write_terrain_campaign(&case_3d(case, 1).unwrap(), dir.path(), 0.0).unwrap();
+        write_terrain_campaign(&case_3d(case, 1).unwrap(), dir.path(), 0.0, &SimParams::default()).unwrap();
         open_model(dir.path(), &dir.path().join("terrain.obj"), ModelKind::Rigid3d, &cfg, "settings").unwrap();
     }
 }

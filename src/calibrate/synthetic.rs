@@ -660,10 +660,12 @@ pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path, track_point_noise_
 /// point off the terrain (a rock that left it, or one its survey noise puts past an edge) is written at the edge,
 /// its run-out measured to there: `talus calibrate` refuses rest points off the terrain.
 ///
+/// The campaign is simulated with the engine settings `sim`.
+///
 /// # Errors
 /// The campaign cannot be simulated, or a file cannot be written.
-pub fn write_terrain_campaign(spec: &Synthetic3d, dir: &Path, track_point_noise_m: f64) -> Result<()> {
-    let model = synthetic_3d(spec, SimParams::default())?;
+pub fn write_terrain_campaign(spec: &Synthetic3d, dir: &Path, track_point_noise_m: f64, sim: &SimParams) -> Result<()> {
+    let model = synthetic_3d(spec, sim.clone())?;
     std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     // The terrain's horizontal extent in the campaign's frame, a millimetre inside its edges.
     let t = model.terrain();
@@ -845,7 +847,7 @@ mod tests {
         // (the OBJ terrain lies in another local frame, so the simulations agree in distribution, not to the bit).
         let spec = Synthetic3d { runs_per_group: 2, track_noise_m: Some(0.0), ..case_3d("speed_tracked", 1).unwrap() };
         let dir = tempfile::tempdir().unwrap();
-        write_terrain_campaign(&spec, dir.path(), 0.0).unwrap();
+        write_terrain_campaign(&spec, dir.path(), 0.0, &SimParams::default()).unwrap();
         let campaign = crate::campaign::Campaign::read(dir.path()).unwrap();
         assert_eq!(campaign.tracks.len(), campaign.releases.len());
         let (runs, groups) = super::super::runs::field_runs(&campaign, 10.0).unwrap();
