@@ -1155,7 +1155,7 @@ fn bounces_read_from_exact_tracks_give_back_the_restitution_of_the_model_that_ma
     // Cr only when the impulse passes through it: the fast impacts (normal speed 8 m/s and more, the drops) come
     // back below it, at a median 0.54 (0.58 without impact sub-steps, where a landing's vertices meet the ground in
     // one 2 ms step); slow ones, where spin turns into a hop off the hull's facets, at about 1 (ours, measured:
-    // 0.965 for 1-3 m/s). So on rigid bodies the apparent restitution falls with impact speed even when Cr
+    // 1.00 for 1-3 m/s, 0.965 without sub-steps). So on rigid bodies the apparent restitution falls with impact speed even when Cr
     // does not: compare tracks with simulated tracks, not with Cr.
     let spec =
         Synthetic3d { track_noise_m: Some(0.0), ..talus::calibrate::synthetic::case_3d("control_a", 1).unwrap() };
