@@ -8,7 +8,6 @@
 //!
 //! Run: cargo run --release --example write_terrain_campaign -- DIR CASE [TRACK_POINT_NOISE_M [SEED [IMPACT_SUBSTEPS]]]
 use talus::calibrate::synthetic::{case_3d, track_noise_arg, write_terrain_campaign};
-use talus::sim::params::MAX_IMPACT_SUBSTEPS;
 use talus::sim::SimParams;
 
 fn main() {
@@ -25,16 +24,16 @@ fn main() {
         eprintln!("error: SEED must be a whole number, e.g. 2");
         std::process::exit(2);
     };
-    let sim = SimParams::default();
-    let sim = match args.get(4).map_or(Ok(sim.impact_substeps), |s| s.parse::<usize>()) {
-        Ok(n) if (1..=MAX_IMPACT_SUBSTEPS).contains(&n) => SimParams { impact_substeps: n, ..sim },
-        _ => {
-            eprintln!(
-                "error: IMPACT_SUBSTEPS must be a whole number from 1 to {MAX_IMPACT_SUBSTEPS}, e.g. 1 (none) or 8"
-            );
-            std::process::exit(2);
-        }
+    let default = SimParams::default();
+    let Ok(impact_substeps) = args.get(4).map_or(Ok(default.impact_substeps), |s| s.parse::<usize>()) else {
+        eprintln!("error: IMPACT_SUBSTEPS must be a whole number, e.g. 1 (none) or 8");
+        std::process::exit(2);
     };
+    let sim = SimParams { impact_substeps, ..default };
+    if let Err(e) = sim.validate("") {
+        eprintln!("error: IMPACT_SUBSTEPS: {e}");
+        std::process::exit(2);
+    }
     let Some(spec) = case_3d(case, seed) else {
         eprintln!("error: no 3DRB case `{case}`; try speed, size, zone, control_a or speed_tracked");
         std::process::exit(2);
