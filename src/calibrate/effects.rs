@@ -101,9 +101,16 @@ pub fn recentring(kind: EffectKind) -> Recentring {
 /// Zone mobility factors tried for a new zone, relative to the material it replaces (ours).
 pub const ZONE_MOBILITY_GRID: [f64; 4] = [0.2, 0.4, 0.7, 1.5];
 
-/// Soft-ground drag rates tried for a new 3DRB zone (with its material otherwise unchanged), 1/s (ours): soft
-/// ground stops a rolling block by drag, which a lower Cr and a higher friction alone do not.
+/// Soft-ground drag rates tried for a new 3DRB zone, 1/s (ours): soft ground stops a rolling block by drag, which
+/// a lower Cr and a higher friction alone do not. Each is tried with the material unchanged and with it at
+/// [`ZONE_SOFT_MOBILITY`].
 pub const ZONE_DRAG_GRID: [f64; 3] = [3.0, 10.0, 30.0];
+
+/// The mobility factor the drag rates are also tried at (ours): soft ground absorbs impacts as well as dragging
+/// (Rockyfor3D's soil classes: Rn 0–0.28 for the softest three against 0.53 for bedrock, physics.md §4), and a block that keeps its bounce hops across drag alone
+/// (with the impact sub-steps, boulders touch the ground for about a sixth of their way over the `zone` case's
+/// plain: docs/calibration.md, "The zone case and the impact sub-steps").
+pub const ZONE_SOFT_MOBILITY: f64 = 0.4;
 
 const SPEED_3D: EffectDef = EffectDef {
     kind: EffectKind::SpeedRestitution,

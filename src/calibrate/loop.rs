@@ -39,7 +39,7 @@ use super::config::{CalibrationConfig, ModelKind, ParamSetting};
 use super::diagnose::{diagnose, merged, spread_check, Diagnostic, DEPOSITION_EXCESS};
 use super::effects::{
     definition, effects_for, proposed_by_default, recentring, EffectDef, EffectKind, Recentring, CR_SCALE_GRID,
-    MOBILITY_GRID, ZONE_DRAG_GRID, ZONE_MOBILITY_GRID,
+    MOBILITY_GRID, ZONE_DRAG_GRID, ZONE_MOBILITY_GRID, ZONE_SOFT_MOBILITY,
 };
 use super::fit::{fit, fit_population, Context};
 use super::impacts::{self, BOUNCE_RESIDUAL};
@@ -1007,8 +1007,11 @@ fn zone_arm(
         // Each candidate zone over its own mobility grid (and, in 3DRB, its drag grid), from the baseline setting
         // (m = 1); the refitting cross-validation then refits the rest of the terrain with it.
         let drags: &[f64] = if model.kind() == ModelKind::Rigid3d { &ZONE_DRAG_GRID } else { &[] };
-        let settings: Vec<(f64, f64)> =
-            ZONE_MOBILITY_GRID.iter().map(|&z| (z, 0.0)).chain(drags.iter().map(|&c| (1.0, c))).collect();
+        let settings: Vec<(f64, f64)> = ZONE_MOBILITY_GRID
+            .iter()
+            .map(|&z| (z, 0.0))
+            .chain([1.0, ZONE_SOFT_MOBILITY].into_iter().flat_map(|z| drags.iter().map(move |&c| (z, c))))
+            .collect();
         for region in &regions {
             let first = match simulated.iter().find(|(r, _)| r == region) {
                 Some(&(_, first)) => first,

@@ -37,8 +37,9 @@ pub enum Hidden {
     MassRestitution(f64),
     /// A soft zone: polygon (x, y) and its material (Cr mean, static °, dynamic °).
     SoftZone(Vec<[f64; 2]>, [f64; 3]),
-    /// A zone of soft ground (3DRB): polygon (x, y) of the terrain's material plus drag at this rate, 1/s.
-    DragZone(Vec<[f64; 2]>, f64),
+    /// A zone of soft ground (3DRB): polygon (x, y), its Cr mean (the terrain's friction and Cr spread) and its
+    /// drag rate, 1/s.
+    DragZone(Vec<[f64; 2]>, [f64; 2]),
     /// A linear drag in contact with the ground everywhere (3DRB), C in kg/s: a rock slows at C/m, so light rocks
     /// are held back most (a size effect through resistance rather than through the bounce).
     VegetationDrag(f64),
@@ -197,8 +198,12 @@ pub const TRUE_3D: [f64; 4] = [0.35, 0.05, 40.0, 32.0];
 ///   blocks from 20 m and half from 0.5 m ([`Synthetic3d::heights_per_run`]): fast and slow impacts share the
 ///   ground, so a place effect cannot explain them (an angle effect still can: the fast drops hit steeply).
 /// - `zone` (and `control_c`): rounded boulders start 2 m above a 20 m long 30° slope that ends in an 8° plain, on
-///   which they roll off the 160 m terrain; `zone` hides soft ground (drag 20/s, [`standard_zone`]) on the plain
-///   below the two southern release points. `rough` hides ground roughness of 0.3 m on the same design: every
+///   which they roll off the 160 m terrain; `zone` hides soft ground (Cr 0.1 and drag 20/s, [`standard_zone`]) on
+///   the plain below the two southern release points. Until 2026-11-28 the soft ground had the terrain's Cr 0.35:
+///   with the impact sub-steps (the default since 2026-11-27) the boulders then hop across it, touching it for
+///   about a sixth of the time, and 17 of its 36 southern runs roll on off the terrain (0 of 36 without the
+///   sub-steps), a split no median run-out can fit; soft ground that also absorbs impacts stops them all, at every
+///   step (docs/calibration.md, "The zone case and the impact sub-steps"). `rough` hides ground roughness of 0.3 m on the same design: every
 ///   impact's normal tilts by up to 68° under the 20 kg boulders and 32° under the 1200 kg ones, which scatters
 ///   run-outs more than the model without it can (on the `size` design the cubes' own tumbling hid it: the spread
 ///   check did not fire).
@@ -246,7 +251,7 @@ pub fn case_3d(name: &str, seed: u64) -> Option<Synthetic3d> {
         "speed" => Synthetic3d { hidden: Hidden::SpeedRestitution(6.0), ..two_regime },
         "speed_mixed" => Synthetic3d { hidden: Hidden::SpeedRestitution(6.0), ..mixed },
         "control_d" => mixed,
-        "zone" => Synthetic3d { hidden: Hidden::DragZone(standard_zone(), 20.0), ..plain },
+        "zone" => Synthetic3d { hidden: Hidden::DragZone(standard_zone(), [0.1, 20.0]), ..plain },
         "control_a" => two_regime,
         "rough" => Synthetic3d { hidden: Hidden::Roughness(0.3), ..plain },
         "control_c" => plain,
@@ -362,7 +367,10 @@ pub fn truth_3d(spec: &Synthetic3d) -> Candidate {
             truth.effects.push(hidden_effect(EffectKind::ScarDrag));
         }
         Hidden::SoftZone(poly, [cr, s, d]) => add_zone_3d(&mut truth, poly, [*cr, 0.02, *s, *d], 0.0),
-        Hidden::DragZone(poly, rate) => add_zone_3d(&mut truth, poly, spec.material, *rate),
+        Hidden::DragZone(poly, [cr, rate]) => {
+            let [_, cr_sd, s, d] = spec.material;
+            add_zone_3d(&mut truth, poly, [*cr, cr_sd, s, d], *rate)
+        }
     }
     truth
 }
