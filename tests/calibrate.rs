@@ -677,7 +677,8 @@ fn rigid_body_loop(name: &str, sim: SimParams) -> talus::calibrate::report::Repo
 
 #[test]
 fn rigid_body_loop_finds_a_hidden_soft_zone() {
-    // A drag of 20 /s on 40 m of the plain below the two southern release points stops their rocks; undeclared.
+    // Soft ground (Cr 0.1, drag 20 /s) on 40 m of the plain below the two southern release points stops their rocks;
+    // undeclared.
     let r = rigid_body_loop("zone", SimParams::default());
     let Some(Region::Polygon(p)) = named_with_cut(&r, "zone").region.clone() else { panic!("no polygon") };
     let (share, centroid_inside) = zone_overlap(&p, &standard_zone());

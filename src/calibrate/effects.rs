@@ -107,9 +107,9 @@ pub const ZONE_MOBILITY_GRID: [f64; 4] = [0.2, 0.4, 0.7, 1.5];
 pub const ZONE_DRAG_GRID: [f64; 3] = [3.0, 10.0, 30.0];
 
 /// The mobility factor the drag rates are also tried at (ours): soft ground absorbs impacts as well as dragging
-/// (Rockyfor3D's soil classes: Rn 0–0.28 for the softest three against 0.53 for bedrock, physics.md §4), and a block that keeps its bounce hops across drag alone
-/// (with the impact sub-steps, boulders touch the ground for about a sixth of their way over the `zone` case's
-/// plain: docs/calibration.md, "The zone case and the impact sub-steps").
+/// (Rockyfor3D's soil classes: Rn 0–0.28 for the softest three against 0.53 for bedrock, physics.md §4), and a
+/// block that keeps its bounce hops across drag alone (with the impact sub-steps, boulders touch 40 m of the `zone`
+/// case's soft ground for 0.3–0.7 s in all: docs/calibration.md, "The zone case and the impact sub-steps").
 pub const ZONE_SOFT_MOBILITY: f64 = 0.4;
 
 const SPEED_3D: EffectDef = EffectDef {
