@@ -202,8 +202,8 @@ pub const TRUE_3D: [f64; 4] = [0.35, 0.05, 40.0, 32.0];
 ///   the plain below the two southern release points. Until 2026-11-28 the soft ground had the terrain's Cr 0.35:
 ///   with the impact sub-steps (the default since 2026-11-27) the boulders then hop across it, and 17 of its 36
 ///   southern runs roll on off the terrain (0 of 36 without the sub-steps), a split no median run-out can fit;
-///   soft ground that also absorbs impacts stops them all, at every step tried (docs/calibration.md, "The zone
-///   case and the impact sub-steps"). `rough` hides ground roughness of 0.3 m on the same design: every impact's
+///   soft ground that also absorbs impacts stops them all at 2 ms, with and without the sub-steps
+///   (docs/calibration.md, "The zone case and the impact sub-steps"). `rough` hides ground roughness of 0.3 m on the same design: every impact's
 ///   normal tilts by up to 68° under the 20 kg boulders and 32° under the 1200 kg ones, which scatters
 ///   run-outs more than the model without it can (on the `size` design the cubes' own tumbling hid it: the spread
 ///   check did not fire).
