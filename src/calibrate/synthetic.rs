@@ -203,10 +203,11 @@ pub const TRUE_3D: [f64; 4] = [0.35, 0.05, 40.0, 32.0];
 ///   with the impact sub-steps (the default since 2026-11-27) the boulders then hop across it, and 17 of its 36
 ///   southern runs roll on off the terrain (0 of 36 without the sub-steps), a split no median run-out can fit;
 ///   soft ground that also absorbs impacts stops them all at 2 ms, with and without the sub-steps
-///   (docs/calibration.md, "The zone case and the impact sub-steps"). `rough` hides ground roughness of 0.3 m on the same design: every impact's
-///   normal tilts by up to 68° under the 20 kg boulders and 32° under the 1200 kg ones, which scatters
-///   run-outs more than the model without it can (on the `size` design the cubes' own tumbling hid it: the spread
-///   check did not fire).
+///   (docs/calibration.md, "The zone case and the impact sub-steps"). `rough` hides ground roughness of 0.3 m on
+///   the same design: every impact's normal tilts by up to 68° under the 20 kg boulders and 32° under the 1200 kg
+///   ones. Without the sub-steps that scattered run-outs more than the model without it could (the spread check
+///   fired, p = 0.001); with them it does not fire (p = 0.30, docs/calibration.md, stop 52). On the `size` design
+///   the cubes' own tumbling hid it.
 /// - `size` (and `control_b`): cubes dropped 0.5 to 20 m onto a 15° apron; `size` hides Cr' = Cr (m/150 kg)^0.4, so
 ///   the 20 kg blocks bounce less and the 1200 kg ones more.
 /// - `size_drag` (and `control_e`): rounded boulders start 2 m above a 20 m long 30° slope that ends in a level
