@@ -714,12 +714,22 @@ fn propose(
             }
         }
     }
-    strongest(props, cfg.effects.max_proposals)
+    let (tried, passed_over) = strongest(props, cfg.effects.max_proposals);
+    if !passed_over.is_empty() {
+        let names: Vec<String> = passed_over.iter().map(|p| format!("{} (p = {:.3})", p.label, p.strength)).collect();
+        (ctx.log)(&format!(
+            "effects loop: signalled but not tried this round ([effects] max_proposals = {}, the strongest first): {}",
+            cfg.effects.max_proposals,
+            names.join(", ")
+        ));
+    }
+    tried
 }
 
-/// `props` strongest first (smallest p, then largest |rho|): the first `max`, and any effect the bounces point at:
-/// they measure restitution directly, where the run-out residuals see it through the whole path (ours).
-fn strongest(mut props: Vec<Proposal>, max: usize) -> Vec<Proposal> {
+/// `props` strongest first (smallest p, then largest |rho|): the first `max`, and any effect the bounces point at
+/// (they measure restitution directly, where the run-out residuals see it through the whole path; ours); then the
+/// rest, passed over.
+fn strongest(mut props: Vec<Proposal>, max: usize) -> (Vec<Proposal>, Vec<Proposal>) {
     props.sort_by(|a, b| {
         a.strength.total_cmp(&b.strength).then_with(|| {
             let ra = a.evidence.iter().map(|d| d.spearman_rho.abs()).fold(0.0, f64::max);
@@ -729,11 +739,10 @@ fn strongest(mut props: Vec<Proposal>, max: usize) -> Vec<Proposal> {
     });
     let direct = |p: &Proposal| p.evidence.iter().any(|d| d.residual == BOUNCE_RESIDUAL);
     let mut k = 0;
-    props.retain(|p| {
+    props.into_iter().partition(|p| {
         k += 1;
         k <= max || direct(p)
-    });
-    props
+    })
 }
 
 /// The diagnostics (run-out correlations, and the spread check) in `def`'s signature at p ≤ `alpha`.
@@ -1128,9 +1137,12 @@ mod tests {
             prop(EffectKind::AngleRestitution, "runout", 0.003),
         ];
         let names = |ps: Vec<Proposal>| ps.iter().map(|p| p.def.name).collect::<Vec<_>>();
-        assert_eq!(names(strongest(props.clone(), 2)), ["roughness", "angle_restitution", "speed_restitution"]);
-        assert_eq!(names(strongest(props.clone(), 3)), ["roughness", "angle_restitution", "speed_restitution"]);
-        assert_eq!(names(strongest(props, 4)).len(), 4);
+        let (tried, passed_over) = strongest(props.clone(), 2);
+        assert_eq!(names(tried), ["roughness", "angle_restitution", "speed_restitution"]);
+        assert_eq!(names(passed_over), ["mass_restitution"]);
+        assert_eq!(names(strongest(props.clone(), 3).0), ["roughness", "angle_restitution", "speed_restitution"]);
+        let (tried, passed_over) = strongest(props, 4);
+        assert_eq!((tried.len(), passed_over.len()), (4, 0));
     }
 
     #[test]
