@@ -267,8 +267,8 @@ pub struct EffectsConfig {
     /// Largest permutation p-value of a signature covariate (or of the deposition check for zones) for proposing
     /// an effect (default 0.05; the cross-validation, not this, decides).
     pub propose_alpha: f64,
-    /// Most effects proposed per round, strongest signature first (default 4), besides those the bounces read from
-    /// tracks point at (always tried).
+    /// Effects tried at a time, strongest signature first (default 4), besides those the bounces read from tracks
+    /// point at (always in the first batch); the next batch is tried only when none of one passes.
     pub max_proposals: usize,
     /// Most rounds (default 3).
     pub max_rounds: usize,
@@ -709,6 +709,13 @@ impl CalibrationConfig {
                 "use 0.05, 0.05 and 0.05",
             ));
         }
+        if e.max_proposals == 0 {
+            return Err(Error::invalid(
+                f("effects.max_proposals"),
+                "must be at least 1 (the effects tried at a time, strongest first)",
+                "use 4",
+            ));
+        }
         if !(99..=MAX_PERMUTATIONS).contains(&e.permutations) {
             return Err(Error::invalid(
                 f("effects.permutations"),
@@ -978,6 +985,8 @@ mod tests {
         assert_eq!(CalibrationConfig::from_toml_str("repeats = 30\n", "c.toml").unwrap().screen_repeats(), 30);
         let e = CalibrationConfig::from_toml_str("[effects]\nscreen_repeats = 21\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: effects.screen_repeats") && e.contains("got 21"), "{e}");
+        let e = CalibrationConfig::from_toml_str("[effects]\nmax_proposals = 0\n", "c.toml").unwrap_err().to_string();
+        assert!(e.contains("c.toml: effects.max_proposals") && e.contains("at least 1"), "{e}");
         assert_eq!(cfg.rebound_weight, None);
         assert_eq!(
             CalibrationConfig::from_toml_str("rebound_weight = 0\n", "c.toml").unwrap().rebound_weight,

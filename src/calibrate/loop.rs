@@ -206,7 +206,7 @@ pub fn effects_loop(
              (exchangeable: 2/(repeats + 1)), p = {:.3}",
             spread.spearman_rho, spread.p_value
         ));
-        let proposals = propose(
+        let (batch, waiting) = propose(
             ctx,
             &allowed,
             &current,
@@ -214,7 +214,7 @@ pub fn effects_loop(
             &spread,
             zc.as_ref().map(|z| (z.p_value, z.statistic, !z.regions.is_empty())),
         );
-        if proposals.is_empty() {
+        if batch.is_empty() {
             (ctx.log)("effects loop: no effect's signature shows in the residuals");
             break;
         }
@@ -245,7 +245,9 @@ pub fn effects_loop(
         let mut passed: Vec<Passed> = Vec::new();
         // With `restart_arms`, the current model with its materials back at the settings' start, shared by the arms.
         let restart_from = cfg.effects.restart_arms.then(|| with_start_materials(ctx, &current));
-        for prop in proposals {
+        // Strongest first, `max_proposals` at a time: the next batch only when none of this one passes, so every
+        // signalled effect is tried before the loop says nothing helps (ours).
+        let mut try_one = |prop: Proposal| -> crate::Result<bool> {
             (ctx.log)(&format!("effects loop, round {round}: trying {}", prop.label));
             let mut effect_free = free.clone();
             if prop.def.kind == EffectKind::Zone {
@@ -375,7 +377,13 @@ pub fn effects_loop(
                     free: effect_free,
                 });
             }
-        }
+            Ok(passes)
+        };
+        in_batches(batch, waiting, cfg.effects.max_proposals, &mut try_one, &|n, left| {
+            (ctx.log)(&format!(
+                "effects loop, round {round}: none of these passes; trying the next {n} signalled ({left} more after them)"
+            ))
+        })?;
         let arms: Vec<(&[f64], usize)> = passed.iter().map(|p| (p.cv_crps_m.as_slice(), p.added_parameters)).collect();
         let Some(pick) = choose(&arms, cfg.effects.one_se_rule) else {
             (ctx.log)("effects loop: no effect clearly improves the cross-validated error");
@@ -467,6 +475,31 @@ pub fn effects_loop(
 const SELECTION_ONE_SE: &str = "of the effects that pass, the one with the fewest added parameters whose out-of-fold \
     mean CRPS is within one standard error (of the per-run differences) of the best one's";
 const SELECTION_BEST: &str = "of the effects that pass, the one with the largest cut";
+
+/// Tries `first`, then `waiting` `max` at a time, strongest first, until a batch holds an effect that passes:
+/// `try_one` tries one and says whether it passed; `next(n, left)` is told of each further batch. So every signalled
+/// effect is tried before a round ends with nothing kept, and a weaker one only when the stronger ones fail (ours).
+fn in_batches<P>(
+    first: Vec<P>,
+    mut waiting: Vec<P>,
+    max: usize,
+    try_one: &mut dyn FnMut(P) -> crate::Result<bool>,
+    next: &dyn Fn(usize, usize),
+) -> crate::Result<()> {
+    let mut batch = first;
+    loop {
+        let mut any = false;
+        for p in batch {
+            any |= try_one(p)?;
+        }
+        if any || waiting.is_empty() {
+            return Ok(());
+        }
+        let n = max.clamp(1, waiting.len());
+        batch = waiting.drain(..n).collect();
+        next(n, waiting.len());
+    }
+}
 
 /// An effect that passed the cross-validation this round.
 struct Passed {
@@ -643,7 +676,7 @@ fn allowed_effects(cfg: &CalibrationConfig, kind: ModelKind) -> Vec<&'static Eff
         .collect()
 }
 
-/// The effects whose signature shows, strongest first.
+/// The effects whose signature shows, strongest first: the first batch (see [`strongest`]) and the rest.
 fn propose(
     ctx: &Context,
     allowed: &[&'static EffectDef],
@@ -651,7 +684,7 @@ fn propose(
     diags: &[Diagnostic],
     spread: &Diagnostic,
     zone: Option<(f64, f64, bool)>,
-) -> Vec<Proposal> {
+) -> (Vec<Proposal>, Vec<Proposal>) {
     let cfg = ctx.cfg;
     let alpha = cfg.effects.propose_alpha;
     // Run-out residuals, on a tracked campaign scored with its rebounds the rebound residuals, and the bounces read
@@ -714,21 +747,21 @@ fn propose(
             }
         }
     }
-    let (tried, passed_over) = strongest(props, cfg.effects.max_proposals);
-    if !passed_over.is_empty() {
-        let names: Vec<String> = passed_over.iter().map(|p| format!("{} (p = {:.3})", p.label, p.strength)).collect();
+    let (first, waiting) = strongest(props, cfg.effects.max_proposals);
+    if !waiting.is_empty() {
+        let names: Vec<String> = waiting.iter().map(|p| format!("{} (p = {:.3})", p.label, p.strength)).collect();
         (ctx.log)(&format!(
-            "effects loop: signalled but not tried this round ([effects] max_proposals = {}, the strongest first): {}",
-            cfg.effects.max_proposals,
+            "effects loop: also signalled, tried only if none of the first {} passes ([effects] max_proposals): {}",
+            first.len(),
             names.join(", ")
         ));
     }
-    tried
+    (first, waiting)
 }
 
 /// `props` strongest first (smallest p, then largest |rho|): the first `max`, and any effect the bounces point at
 /// (they measure restitution directly, where the run-out residuals see it through the whole path; ours); then the
-/// rest, passed over.
+/// rest, waiting for a later batch.
 fn strongest(mut props: Vec<Proposal>, max: usize) -> (Vec<Proposal>, Vec<Proposal>) {
     props.sort_by(|a, b| {
         a.strength.total_cmp(&b.strength).then_with(|| {
@@ -1143,6 +1176,27 @@ mod tests {
         assert_eq!(names(strongest(props.clone(), 3).0), ["roughness", "angle_restitution", "speed_restitution"]);
         let (tried, passed_over) = strongest(props, 4);
         assert_eq!((tried.len(), passed_over.len()), (4, 0));
+    }
+
+    #[test]
+    fn a_further_batch_is_tried_only_when_none_of_the_last_passes() {
+        let run = |first: Vec<u8>, waiting: Vec<u8>, passing: &[u8]| {
+            let (mut tried, batches) = (Vec::new(), std::cell::RefCell::new(Vec::new()));
+            let mut try_one = |p: u8| {
+                tried.push(p);
+                Ok(passing.contains(&p))
+            };
+            in_batches(first, waiting, 2, &mut try_one, &|n, left| batches.borrow_mut().push((n, left))).unwrap();
+            (tried, batches.into_inner())
+        };
+        // The first batch passes: the rest wait.
+        assert_eq!(run(vec![1, 2], vec![3, 4, 5], &[2]), (vec![1, 2], vec![]));
+        // Only the fourth passes: the second batch is tried, not the third.
+        assert_eq!(run(vec![1, 2], vec![3, 4, 5], &[4, 5]), (vec![1, 2, 3, 4], vec![(2, 1)]));
+        // Nothing passes: all are tried.
+        assert_eq!(run(vec![1, 2], vec![3, 4, 5], &[]), (vec![1, 2, 3, 4, 5], vec![(2, 1), (1, 0)]));
+        // Nothing in the first batch (every proposal waits): the next is tried all the same.
+        assert_eq!(run(vec![], vec![3], &[3]), (vec![3], vec![(1, 0)]));
     }
 
     #[test]
