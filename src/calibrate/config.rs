@@ -712,7 +712,7 @@ impl CalibrationConfig {
         if e.max_proposals == 0 {
             return Err(Error::invalid(
                 f("effects.max_proposals"),
-                "must be at least 1 (the effects tried at a time, strongest first)",
+                "must be at least 1 (the effects tried at a time, strongest first), got 0",
                 "use 4",
             ));
         }
@@ -986,7 +986,7 @@ mod tests {
         let e = CalibrationConfig::from_toml_str("[effects]\nscreen_repeats = 21\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: effects.screen_repeats") && e.contains("got 21"), "{e}");
         let e = CalibrationConfig::from_toml_str("[effects]\nmax_proposals = 0\n", "c.toml").unwrap_err().to_string();
-        assert!(e.contains("c.toml: effects.max_proposals") && e.contains("at least 1"), "{e}");
+        assert!(e.contains("c.toml: effects.max_proposals") && e.contains("got 0"), "{e}");
         assert_eq!(cfg.rebound_weight, None);
         assert_eq!(
             CalibrationConfig::from_toml_str("rebound_weight = 0\n", "c.toml").unwrap().rebound_weight,
