@@ -245,8 +245,7 @@ pub fn effects_loop(
         let mut passed: Vec<Passed> = Vec::new();
         // With `restart_arms`, the current model with its materials back at the settings' start, shared by the arms.
         let restart_from = cfg.effects.restart_arms.then(|| with_start_materials(ctx, &current));
-        // Strongest first, `max_proposals` at a time: the next batch only when none of this one passes, so every
-        // signalled effect is tried before the loop says nothing helps (ours).
+        // Each proposal's arm; `in_batches` decides which are tried.
         let mut try_one = |prop: Proposal| -> crate::Result<bool> {
             (ctx.log)(&format!("effects loop, round {round}: trying {}", prop.label));
             let mut effect_free = free.clone();
@@ -1170,12 +1169,12 @@ mod tests {
             prop(EffectKind::AngleRestitution, "runout", 0.003),
         ];
         let names = |ps: Vec<Proposal>| ps.iter().map(|p| p.def.name).collect::<Vec<_>>();
-        let (tried, passed_over) = strongest(props.clone(), 2);
-        assert_eq!(names(tried), ["roughness", "angle_restitution", "speed_restitution"]);
-        assert_eq!(names(passed_over), ["mass_restitution"]);
+        let (first, waiting) = strongest(props.clone(), 2);
+        assert_eq!(names(first), ["roughness", "angle_restitution", "speed_restitution"]);
+        assert_eq!(names(waiting), ["mass_restitution"]);
         assert_eq!(names(strongest(props.clone(), 3).0), ["roughness", "angle_restitution", "speed_restitution"]);
-        let (tried, passed_over) = strongest(props, 4);
-        assert_eq!((tried.len(), passed_over.len()), (4, 0));
+        let (first, waiting) = strongest(props, 4);
+        assert_eq!((first.len(), waiting.len()), (4, 0));
     }
 
     #[test]
