@@ -198,6 +198,14 @@ fn several_searches_or_start_points_keep_the_one_best_on_fresh_numbers() {
     assert!(points.population_fit["searches"].as_array().unwrap().iter().all(|s| s["start_screened_m"].is_null()));
 }
 
+/// The engine with a time limit of 30 s instead of 120 s for the synthetic 3DRB calibrations (their rocks stop
+/// within seconds; those the zone arm's soft drag sets creeping on the slope, engine test
+/// `on_soft_ground_steeper_than_its_dynamic_friction_a_block_creeps_at_the_terminal_speed_and_never_stops`, would
+/// otherwise be simulated for 120 s each).
+fn short_runs() -> SimParams {
+    SimParams { max_time_s: 30.0, ..SimParams::default() }
+}
+
 /// Tiny settings for the 3DRB tests (the engine runs in a debug build here).
 fn tiny_3d() -> CalibrationConfig {
     let mut cfg = CalibrationConfig {
@@ -219,7 +227,7 @@ fn tiny_3d() -> CalibrationConfig {
 #[test]
 fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
     let spec = Synthetic3d { runs_per_group: 2, release_points: 2, masses_kg: vec![50.0, 400.0], ..Default::default() };
-    let model = synthetic_3d(&spec, SimParams::default()).unwrap();
+    let model = synthetic_3d(&spec, short_runs()).unwrap();
     assert_eq!(model.kind(), ModelKind::Rigid3d);
     let mut cfg = tiny_3d();
     let (cal, hold) = split::seeded_split(model.runs(), 0.25, cfg.seed);
@@ -227,8 +235,20 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
     cfg.threads = 1;
     let one = calibrate(&model, &cfg, &cal, &hold, "seeded", Some(dir.path()), &quiet).unwrap();
     cfg.threads = 2;
-    let two = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap();
+    let log = std::sync::Mutex::new(Vec::new());
+    let two = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &|m: &str| log.lock().unwrap().push(m.to_string()))
+        .unwrap();
     assert_eq!(one.report.baseline.parameters, two.report.baseline.parameters);
+    // The zone arm says how many of its simulations did not come to rest: here rocks creeping on its soft ground.
+    let log = log.into_inner().unwrap();
+    let unrested = log.iter().find(|l| l.contains("simulations left the terrain or ran to the time limit"));
+    let counts: Vec<usize> = unrested
+        .expect("no count")
+        .split_whitespace()
+        .filter_map(|w| w.trim_matches(&['(', ')'][..]).parse().ok())
+        .collect();
+    assert!(counts[0] > 0 && counts[2] == 0, "{unrested:?}");
+    assert!(log.iter().any(|l| l.contains("a lower [simulation] max_time_s shortens it")), "{log:#?}");
     assert_eq!(
         one.report.final_stage.holdout.runout_mae_m.to_bits(),
         two.report.final_stage.holdout.runout_mae_m.to_bits()
@@ -679,7 +699,7 @@ fn rigid_body_loop(name: &str, sim: SimParams) -> talus::calibrate::report::Repo
 fn rigid_body_loop_finds_a_hidden_soft_zone() {
     // Soft ground (Cr 0.1, drag 20 /s) on 40 m of the plain below the two southern release points stops their rocks;
     // undeclared.
-    let r = rigid_body_loop("zone", SimParams::default());
+    let r = rigid_body_loop("zone", short_runs());
     let Some(Region::Polygon(p)) = named_with_cut(&r, "zone").region.clone() else { panic!("no polygon") };
     let (share, centroid_inside) = zone_overlap(&p, &standard_zone());
     assert!(share > 0.5 && centroid_inside, "zone {p:?} lies {:.0} % in the hidden one", 100.0 * share);
@@ -689,7 +709,7 @@ fn rigid_body_loop_finds_a_hidden_soft_zone() {
 fn rigid_body_loop_adds_nothing_without_a_hidden_effect() {
     // The same plain without the soft ground: the zone check still proposes a zone here, and the cross-validation
     // must turn it down.
-    let r = rigid_body_loop("control_c", SimParams { impact_substeps: 1, ..SimParams::default() });
+    let r = rigid_body_loop("control_c", SimParams { impact_substeps: 1, ..short_runs() });
     assert!(r.effects_added.is_empty(), "{:#?}", r.effects_tried);
     assert!(!r.effects_tried.is_empty(), "nothing was tried: the test no longer exercises the keep rule");
 }

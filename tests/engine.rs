@@ -278,6 +278,28 @@ fn drag_on_soft_ground_stops_a_frictionless_block_after_v0_over_c() {
 }
 
 #[test]
+fn on_soft_ground_steeper_than_its_dynamic_friction_a_block_creeps_at_the_terminal_speed_and_never_stops() {
+    // Sliding down θ with dynamic friction μ below tan θ and drag c: dv/dt = a − c v with a = g (sin θ − μ cos θ),
+    // so v → a/c. Stepped (drag as exp(−c h) after each step of h) the steady speed is a h e^(−ch)/(1 − e^(−ch))
+    // ≈ a/c − a h/2. At 15°, 8° and 10 /s that is 0.12 m/s, above the 0.1 m/s rest speed: the block creeps on
+    // until the time limit, however high its static friction. This is why a calibration's zone arm, whose soft
+    // ground tries drags of 3 and 10 /s, can run rocks to `max_time_s` (docs/calibration.md).
+    let (slope, phi_d, c) = (15.0f64, 8.0f64, 10.0);
+    let terrain = incline(slope, Material { drag_per_s: c, ..material(0.0, 45.0, phi_d) });
+    let r = rock(ShapeKind::FlatBox, 1000.0);
+    let params = SimParams { max_time_s: 20.0, ..SimParams::default() };
+    let out = simulate(&terrain, &r, resting_on_incline(&r, slope, 60.0, 1.0), &params, &mut stream(1, 0), &mut ());
+    assert_eq!(out.stop_reason, StopReason::MaxTime);
+    let th = slope.to_radians();
+    let a = GRAVITY_MPS2 * (th.sin() - phi_d.to_radians().tan() * th.cos());
+    let decay = (-c * params.dt_s).exp();
+    let stepped = a * params.dt_s * decay / (1.0 - decay);
+    assert_relative_eq!(out.final_state.velocity_mps.norm(), stepped, max_relative = 1e-3);
+    assert_relative_eq!(stepped, a / c, max_relative = 0.02);
+    assert!(stepped > params.stop_speed_mps);
+}
+
+#[test]
 fn vegetation_drag_stops_a_frictionless_block_after_v0_m_over_c() {
     // The force −C·v decelerates a rock of mass m at rate C/m: it glides v0·m/C, so a block of half the mass stops
     // in half the distance.

@@ -1071,6 +1071,25 @@ fn zone_arm(
             chosen.extend(first..first + settings.len());
         }
     }
+    if let Some(&(_, first)) = simulated.first() {
+        let not_at_rest = |s: &[Vec<RunSims>]| {
+            let sims = || s.iter().flatten().flat_map(|r| &r.sims);
+            (sims().filter(|x| !x.stopped).count(), sims().count())
+        };
+        let (zone, zone_all) = not_at_rest(&arm.settings[first..]);
+        let (base, base_all) = not_at_rest(std::slice::from_ref(reference));
+        (ctx.log)(&format!(
+            "  {label}: {zone} of {zone_all} simulations left the terrain or ran to the time limit (the baseline: {base} \
+             of {base_all})"
+        ));
+        if zone as f64 / zone_all as f64 > 2.0 * base as f64 / base_all as f64 + 0.01 {
+            (ctx.log)(
+                "  on a zone with soft-ground drag a rock creeps on, to the time limit, where the slope is steeper than \
+                 its dynamic friction; if that is what lengthens this arm, a lower [simulation] max_time_s shortens it \
+                 (README, \"Why a 3DRB zone arm can take an hour\")",
+            );
+        }
+    }
     Ok(arm)
 }
 
