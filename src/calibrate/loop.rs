@@ -1031,6 +1031,8 @@ fn zone_arm(
     let mut arm = Arm { fold_settings: vec![Vec::new(); k], ..Default::default() };
     // Folds often find the same zone: each region's settings are simulated once, from this index on.
     let mut simulated: Vec<(Region, usize)> = Vec::new();
+    // The zone settings' simulations that did not come to rest, and all of them.
+    let mut unrested = (0usize, 0usize);
     for f in 0..=k {
         // f == k: all calibration runs.
         let train: Vec<RunSims> =
@@ -1061,7 +1063,10 @@ fn zone_arm(
                     simulated.push((region.clone(), first));
                     for &(z, drag) in &settings {
                         let c = with_zone(model, base, label, region, z, drag);
-                        arm.settings.push(sims_reusing(ctx, &c, cal, reference, region)?);
+                        let sims = sims_reusing(ctx, &c, cal, reference, region)?;
+                        let (n, all) = not_at_rest(&sims);
+                        unrested = (unrested.0 + n, unrested.1 + all);
+                        arm.settings.push(sims);
                         arm.cands.push(c);
                     }
                     first
@@ -1071,13 +1076,8 @@ fn zone_arm(
             chosen.extend(first..first + settings.len());
         }
     }
-    if let Some(&(_, first)) = simulated.first() {
-        let not_at_rest = |s: &[Vec<RunSims>]| {
-            let sims = || s.iter().flatten().flat_map(|r| &r.sims);
-            (sims().filter(|x| !x.stopped).count(), sims().count())
-        };
-        let (zone, zone_all) = not_at_rest(&arm.settings[first..]);
-        let (base, base_all) = not_at_rest(std::slice::from_ref(reference));
+    if let (zone, zone_all @ 1..) = unrested {
+        let (base, base_all) = not_at_rest(reference);
         (ctx.log)(&format!(
             "  {label}: {zone} of {zone_all} simulations left the terrain or ran to the time limit (the baseline: {base} \
              of {base_all})"
@@ -1091,6 +1091,12 @@ fn zone_arm(
         }
     }
     Ok(arm)
+}
+
+/// How many of `sims` did not come to rest (left the terrain or ran to the time limit), and how many there are.
+fn not_at_rest(sims: &[RunSims]) -> (usize, usize) {
+    let all = || sims.iter().flat_map(|r| &r.sims);
+    (all().filter(|x| !x.stopped).count(), all().count())
 }
 
 /// Simulates `cal` under `c`, reusing `reference` (the same candidate without the zone) for every simulation whose
