@@ -43,7 +43,7 @@ use super::effects::{
 };
 use super::fit::{fit, fit_population, Context};
 use super::impacts::{self, BOUNCE_RESIDUAL};
-use super::model::{Model, RunSims, Sim};
+use super::model::{not_at_rest, Model, RunSims, Sim};
 use super::objective::{run_score, score, score_of};
 use super::params::{
     apply_mobility_2d, apply_mobility_3d, fold_mobility, friction_over, mobility_scaled, normalize, Candidate,
@@ -1091,12 +1091,6 @@ fn zone_arm(
         }
     }
     Ok(arm)
-}
-
-/// How many of `sims` did not come to rest (left the terrain or ran to the time limit), and how many there are.
-fn not_at_rest(sims: &[RunSims]) -> (usize, usize) {
-    let all = || sims.iter().flat_map(|r| &r.sims);
-    (all().filter(|x| !x.stopped).count(), all().count())
 }
 
 /// Simulates `cal` under `c`, reusing `reference` (the same candidate without the zone) for every simulation whose

@@ -28,7 +28,7 @@
 //! what the number of runs allows; a coverage above its yardstick means simulated ranges wider than the field's.
 //! They choose nothing.
 
-use super::model::RunSims;
+use super::model::{not_at_rest, RunSims};
 use super::objective::rebound_crps;
 use super::runs::FieldRun;
 use super::stats::{mean, median, quantile_sorted, sorted, wasserstein1};
@@ -103,7 +103,6 @@ pub fn metrics(runs: &[FieldRun], sims: &[RunSims]) -> Metrics {
     let mut abs_err = Vec::with_capacity(n);
     let mut end_err = Vec::with_capacity(n);
     let mut covered = 0usize;
-    let mut not_stopped = 0usize;
     for s in sims {
         let r = &runs[s.run];
         abs_err.push((s.median_runout() - r.runout_m).abs());
@@ -112,8 +111,8 @@ pub fn metrics(runs: &[FieldRun], sims: &[RunSims]) -> Metrics {
         if in_90_range(&sorted(&s.runouts()), r.runout_m) {
             covered += 1;
         }
-        not_stopped += s.sims.iter().filter(|x| !x.stopped).count();
     }
+    let (not_stopped, _) = not_at_rest(sims);
     let which: Vec<usize> = sims.iter().map(|s| s.run).collect();
     let if_right = were_the_model_right(sims);
     let tracked: Vec<&RunSims> = sims.iter().filter(|s| runs[s.run].rebound_height_m.is_some()).collect();

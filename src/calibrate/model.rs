@@ -73,6 +73,12 @@ pub struct RunSims {
     pub sims: Vec<Sim>,
 }
 
+/// How many of `sims` did not come to rest (left the terrain or ran to the time limit), and how many there are.
+pub fn not_at_rest(sims: &[RunSims]) -> (usize, usize) {
+    let all = || sims.iter().flat_map(|r| &r.sims);
+    (all().filter(|x| !x.stopped).count(), all().count())
+}
+
 impl RunSims {
     /// The repeats in `range`, cut to the repeats there are.
     pub fn repeats_in(&self, range: std::ops::Range<usize>) -> &[Sim] {
