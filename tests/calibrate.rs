@@ -249,6 +249,16 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
         .collect();
     assert!(counts[0] > 0 && counts[2] == 0, "{unrested:?}");
     assert!(log.iter().any(|l| l.contains("a lower [simulation] max_time_s shortens it")), "{log:#?}");
+    // It names each candidate region as it simulates it, counted 1 of n to n of n in each zone arm.
+    let mut next = 1;
+    for l in log.iter().filter(|l| l.contains(": candidate region ")) {
+        let w: Vec<&str> = l.split_whitespace().collect();
+        let at = w.iter().position(|&x| x == "region").unwrap();
+        let (i, n): (usize, usize) = (w[at + 1].parse().unwrap(), w[at + 3].parse().unwrap());
+        assert_eq!(i, next, "{l}");
+        next = if i == n { 1 } else { i + 1 };
+    }
+    assert!(log.iter().any(|l| l.contains(": candidate region 1 of ")) && next == 1, "{log:#?}");
     assert_eq!(
         one.report.final_stage.holdout.runout_mae_m.to_bits(),
         two.report.final_stage.holdout.runout_mae_m.to_bits()

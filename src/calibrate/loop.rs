@@ -1033,11 +1033,29 @@ fn zone_arm(
     let mut simulated: Vec<(Region, usize)> = Vec::new();
     // The zone settings' simulations that did not come to rest, and all of them.
     let mut unrested = (0usize, 0usize);
-    for f in 0..=k {
-        // f == k: all calibration runs.
-        let train: Vec<RunSims> =
-            (0..cal.len()).filter(|&j| f == k || fold_of[j] != f).map(|j| diag_sims[j].clone()).collect();
-        let regions = zone_check(model, &train, &frame, 0, cfg.seed).regions;
+    // Each candidate zone over its own mobility grid (and, in 3DRB, its drag grid), from the baseline setting
+    // (m = 1); the refitting cross-validation then refits the rest of the terrain with it.
+    let drags: &[f64] = if model.kind() == ModelKind::Rigid3d { &ZONE_DRAG_GRID } else { &[] };
+    let settings: Vec<(f64, f64)> = ZONE_MOBILITY_GRID
+        .iter()
+        .map(|&z| (z, 0.0))
+        .chain([1.0, ZONE_SOFT_MOBILITY].into_iter().flat_map(|z| drags.iter().map(move |&c| (z, c))))
+        .collect();
+    // Each fold's candidate regions from its training runs (the last: from all calibration runs).
+    let fold_regions: Vec<Vec<Region>> = (0..=k)
+        .map(|f| {
+            let train: Vec<RunSims> =
+                (0..cal.len()).filter(|&j| f == k || fold_of[j] != f).map(|j| diag_sims[j].clone()).collect();
+            zone_check(model, &train, &frame, 0, cfg.seed).regions
+        })
+        .collect();
+    let mut distinct: Vec<&Region> = Vec::new();
+    for r in fold_regions.iter().flatten() {
+        if !distinct.contains(&r) {
+            distinct.push(r);
+        }
+    }
+    for (f, regions) in fold_regions.iter().enumerate() {
         if regions.is_empty() {
             if f < k {
                 // No zone from this fold's training runs: the arm predicts with the baseline setting.
@@ -1047,20 +1065,23 @@ fn zone_arm(
             }
             continue;
         }
-        // Each candidate zone over its own mobility grid (and, in 3DRB, its drag grid), from the baseline setting
-        // (m = 1); the refitting cross-validation then refits the rest of the terrain with it.
-        let drags: &[f64] = if model.kind() == ModelKind::Rigid3d { &ZONE_DRAG_GRID } else { &[] };
-        let settings: Vec<(f64, f64)> = ZONE_MOBILITY_GRID
-            .iter()
-            .map(|&z| (z, 0.0))
-            .chain([1.0, ZONE_SOFT_MOBILITY].into_iter().flat_map(|z| drags.iter().map(move |&c| (z, c))))
-            .collect();
-        for region in &regions {
+        for region in regions {
             let first = match simulated.iter().find(|(r, _)| r == region) {
                 Some(&(_, first)) => first,
                 None => {
                     let first = arm.settings.len();
                     simulated.push((region.clone(), first));
+                    let [x0, y0, x1, y1] = region.bbox();
+                    let place = match region {
+                        Region::Polygon(_) => format!("x {x0:.0} to {x1:.0} m, y {y0:.0} to {y1:.0} m"),
+                        Region::Interval(_) => format!("{x0:.0} to {x1:.0} m along the profile"),
+                    };
+                    (ctx.log)(&format!(
+                        "  {label}: candidate region {} of {} ({place}), {} settings",
+                        simulated.len(),
+                        distinct.len(),
+                        settings.len()
+                    ));
                     for &(z, drag) in &settings {
                         let c = with_zone(model, base, label, region, z, drag);
                         let sims = sims_reusing(ctx, &c, cal, reference, region)?;
