@@ -1029,8 +1029,6 @@ fn zone_arm(
     let mid = MOBILITY_GRID.len() / 2;
     let (reference, base) = (&base_arm.settings[mid], &base_arm.cands[mid]);
     let mut arm = Arm { fold_settings: vec![Vec::new(); k], ..Default::default() };
-    // Folds often find the same zone: each region's settings are simulated once, from this index on.
-    let mut simulated: Vec<(Region, usize)> = Vec::new();
     // The zone settings' simulations that did not come to rest, and all of them.
     let mut unrested = (0usize, 0usize);
     // Each candidate zone over its own mobility grid (and, in 3DRB, its drag grid), from the baseline setting
@@ -1041,20 +1039,24 @@ fn zone_arm(
         .map(|&z| (z, 0.0))
         .chain([1.0, ZONE_SOFT_MOBILITY].into_iter().flat_map(|z| drags.iter().map(move |&c| (z, c))))
         .collect();
-    // Each fold's candidate regions from its training runs (the last: from all calibration runs).
-    let fold_regions: Vec<Vec<Region>> = (0..=k)
-        .map(|f| {
-            let train: Vec<RunSims> =
-                (0..cal.len()).filter(|&j| f == k || fold_of[j] != f).map(|j| diag_sims[j].clone()).collect();
-            zone_check(model, &train, &frame, 0, cfg.seed).regions
-        })
-        .collect();
-    let mut distinct: Vec<&Region> = Vec::new();
-    for r in fold_regions.iter().flatten() {
-        if !distinct.contains(&r) {
-            distinct.push(r);
+    // Each fold's candidate regions from its training runs (the last: from all calibration runs), as indices into
+    // the distinct regions: folds often find the same zone, whose settings are then simulated once.
+    let mut distinct: Vec<Region> = Vec::new();
+    let mut fold_regions: Vec<Vec<usize>> = Vec::new();
+    for f in 0..=k {
+        let train: Vec<RunSims> =
+            (0..cal.len()).filter(|&j| f == k || fold_of[j] != f).map(|j| diag_sims[j].clone()).collect();
+        let mut ids = Vec::new();
+        for region in zone_check(model, &train, &frame, 0, cfg.seed).regions {
+            ids.push(distinct.iter().position(|d| *d == region).unwrap_or_else(|| {
+                distinct.push(region);
+                distinct.len() - 1
+            }));
         }
+        fold_regions.push(ids);
     }
+    // Where each distinct region's settings start in the arm, once simulated.
+    let mut first_setting: Vec<Option<usize>> = vec![None; distinct.len()];
     for (f, regions) in fold_regions.iter().enumerate() {
         if regions.is_empty() {
             if f < k {
@@ -1065,12 +1067,13 @@ fn zone_arm(
             }
             continue;
         }
-        for region in regions {
-            let first = match simulated.iter().find(|(r, _)| r == region) {
-                Some(&(_, first)) => first,
+        for &i in regions {
+            let region = &distinct[i];
+            let first = match first_setting[i] {
+                Some(first) => first,
                 None => {
                     let first = arm.settings.len();
-                    simulated.push((region.clone(), first));
+                    first_setting[i] = Some(first);
                     let [x0, y0, x1, y1] = region.bbox();
                     let place = match region {
                         Region::Polygon(_) => format!("x {x0:.0} to {x1:.0} m, y {y0:.0} to {y1:.0} m"),
@@ -1078,7 +1081,7 @@ fn zone_arm(
                     };
                     (ctx.log)(&format!(
                         "  {label}: candidate region {} of {} ({place}), {} settings",
-                        simulated.len(),
+                        i + 1,
                         distinct.len(),
                         settings.len()
                     ));
