@@ -4,8 +4,9 @@
 //! cargo run --release --example benchmark                  # all cases, 1,000 rocks each
 //! cargo run --release --example benchmark -- --memory      # also 100,000 rocks on ~10^6 triangles (minutes)
 //! ```
-//! Cases: the bench stack (`examples/bench_stack.toml`), the Tyrol crop (`examples/tyrol.toml`), and the same Tyrol
-//! rocks on the crop refined by bilinear interpolation to about 10^4, 10^5 and 10^6 triangles. Each case runs in its
+//! Cases: the bench stack (`examples/bench_stack.toml`), the Tyrol crop (`examples/tyrol.toml`), the same Tyrol
+//! rocks on the crop refined by bilinear interpolation to about 10^4, 10^5 and 10^6 triangles, and the calibrated
+//! Tschamut model (`examples/calibrated_tschamut.toml`: the field releases, the simulations a calibration runs). Each case runs in its
 //! own process so that its peak memory (VmHWM) is its own; rocks/s is given for all cores and per core.
 
 use std::path::Path;
@@ -30,8 +31,14 @@ fn main() {
         "{:<28} {:>10} {:>8} {:>10} {:>12} {:>14} {:>12}",
         "case", "triangles", "rocks", "threads", "rocks/s", "rocks/s/core", "peak MiB"
     );
-    let mut cases: Vec<(&str, usize)> =
-        vec![("bench_stack", 1000), ("tyrol", 1000), ("tyrol_x1", 1000), ("tyrol_x3", 1000), ("tyrol_x9", 1000)];
+    let mut cases: Vec<(&str, usize)> = vec![
+        ("bench_stack", 1000),
+        ("tyrol", 1000),
+        ("tyrol_x1", 1000),
+        ("tyrol_x3", 1000),
+        ("tyrol_x9", 1000),
+        ("tschamut", 1000),
+    ];
     if args.iter().any(|a| a == "--memory") {
         cases.push(("tyrol_x9_run", 100_000));
     }
@@ -57,8 +64,11 @@ fn run_case(case: &str, rocks: usize, threads: usize) {
     if case == "tyrol_x9_run" {
         return full_run(root, rocks, threads);
     }
-    let scenario_path =
-        root.join(if case == "bench_stack" { "examples/bench_stack.toml" } else { "examples/tyrol.toml" });
+    let scenario_path = root.join(match case {
+        "bench_stack" => "examples/bench_stack.toml",
+        "tschamut" => "examples/calibrated_tschamut.toml",
+        _ => "examples/tyrol.toml",
+    });
     let sc = ScenarioFile::read(&scenario_path).and_then(|f| f.resolve(&scenario_path)).expect("scenario");
     let overrides = RunOverrides { rocks: Some(rocks), seed: None, threads: Some(threads), paths: None };
     let mut s = setup(&sc, &overrides).expect("setup");

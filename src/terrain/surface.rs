@@ -52,6 +52,9 @@ pub struct Surface {
     items: Vec<u32>,
     /// Max-height pyramid; level 0 has nx × ny bins, each next level halves both sizes (rounded up).
     zmax: Vec<(usize, usize, Vec<f64>)>,
+    /// Per bin, a plane (a, b, c) with z ≤ a·x + b·y + c for every triangle of the bin over the bin: on a slope far
+    /// tighter than the bin's highest point (`c` infinite where the bin has no triangle with a footprint).
+    upper: Vec<[f64; 3]>,
     z_min_m: f64,
     z_max_m: f64,
     extent: (f64, f64, f64, f64),
@@ -154,6 +157,7 @@ impl Surface {
             offsets: Vec::new(),
             items: Vec::new(),
             zmax: Vec::new(),
+            upper: Vec::new(),
             z_min_m: lo.z,
             z_max_m: hi.z,
             extent: (lo.x, lo.y, hi.x, hi.y),
@@ -163,8 +167,9 @@ impl Surface {
     }
 
     fn bin_range(&self, lo: f64, hi: f64, origin: f64, n: usize) -> (usize, usize) {
-        let a = ((lo - origin) / self.bin_m).floor().max(0.0) as usize;
-        let b = ((hi - origin) / self.bin_m).floor().max(0.0) as usize;
+        // `as` truncates and saturates (negative and NaN to 0): the floor clamped at 0, without a call to `floor`.
+        let a = ((lo - origin) / self.bin_m) as usize;
+        let b = ((hi - origin) / self.bin_m) as usize;
         (a.min(n - 1), b.min(n - 1))
     }
 
@@ -205,6 +210,7 @@ impl Surface {
         let items: Vec<u32> = pairs.into_iter().map(|(_, t)| t).collect();
         self.offsets = counts;
         self.items = items;
+        self.upper = (0..nx * ny).map(|k| self.upper_plane(k)).collect();
         let mut levels = vec![(nx, ny, zmax)];
         while levels.last().map(|(w, h, _)| *w > 1 || *h > 1).unwrap_or(false) {
             let (w, h, prev) = levels.last().expect("non-empty");
@@ -219,6 +225,48 @@ impl Surface {
             levels.push((w2, h2, next));
         }
         self.zmax = levels;
+    }
+
+    /// A plane over bin `k`'s triangles (those with a footprint) within the bin: their mean slope, raised to clear
+    /// the highest of them at the corners of its part in the bin (where a linear function over a convex polygon
+    /// peaks), plus a margin for rounding and for the small tolerance with which [`Surface::at`] counts a point on
+    /// a triangle's edge as inside it.
+    fn upper_plane(&self, k: usize) -> [f64; 3] {
+        let tris: Vec<u32> = self.items[self.offsets[k] as usize..self.offsets[k + 1] as usize]
+            .iter()
+            .copied()
+            .filter(|&t| !self.planes[t as usize].vertical)
+            .collect();
+        if tris.is_empty() {
+            return [0.0, 0.0, f64::INFINITY];
+        }
+        let n = tris.len() as f64;
+        let a = tris.iter().map(|&t| self.planes[t as usize].a).sum::<f64>() / n;
+        let b = tris.iter().map(|&t| self.planes[t as usize].b).sum::<f64>() / n;
+        let (i, j) = (k % self.nx, k / self.nx);
+        let eps = 1e-9 * self.bin_m;
+        let (bx, by) = (self.x0 + i as f64 * self.bin_m - eps, self.y0 + j as f64 * self.bin_m - eps);
+        let side = self.bin_m + 2.0 * eps;
+        let (mut c, mut margin) = (f64::NEG_INFINITY, 0.0f64);
+        for &t in &tris {
+            let p = &self.planes[t as usize];
+            let corners =
+                self.triangles[t as usize].map(|v| [self.vertices[v as usize].x, self.vertices[v as usize].y]);
+            let mut part = clip_to_box(&corners, [bx, by, bx + side, by + side]);
+            if part.is_empty() {
+                // Touching the bin only within the tolerance: its own corners are as near.
+                part = corners.to_vec();
+            }
+            for [x, y] in part {
+                c = c.max(p.a * x + p.b * y + p.c - a * x - b * y);
+            }
+            // The gradient of the triangle's height above the plane, times how far outside its footprint a point
+            // may be counted as inside (1e-9 of its size, `at`) or misplaced by rounding.
+            let size = corners.iter().flat_map(|u| corners.iter().map(move |v| (u[0] - v[0]).hypot(u[1] - v[1])));
+            let reach = 1e-8 * (size.fold(0.0, f64::max) + self.bin_m + 1.0);
+            margin = margin.max(((p.a - a).abs() + (p.b - b).abs()) * reach);
+        }
+        [a, b, c + margin + 1e-6]
     }
 
     /// The surface under (x, y): the highest triangle whose footprint holds the point. `None` over holes and
@@ -255,16 +303,19 @@ impl Surface {
         best.map(|(z, t)| SurfacePoint { z_m: z, normal: self.normal(t), triangle: t })
     }
 
-    /// An upper bound of the surface height in the bin holding (x, y) (`NEG_INFINITY` outside or over holes): a
-    /// one-lookup test that a point is above the ground.
+    /// An upper bound of the surface height at (x, y) from the bin holding it (`NEG_INFINITY` outside or over
+    /// holes): the lower of the bin's highest point and its bounding plane, a one-lookup test that a point is above
+    /// the ground.
     #[inline]
-    pub fn bin_max_height(&self, x: f64, y: f64) -> f64 {
+    pub fn upper_bound_at(&self, x: f64, y: f64) -> f64 {
         let fi = (x - self.x0) / self.bin_m;
         let fj = (y - self.y0) / self.bin_m;
         if !(fi >= 0.0 && fj >= 0.0) || fi as usize >= self.nx || fj as usize >= self.ny {
             return f64::NEG_INFINITY;
         }
-        self.zmax[0].2[fj as usize * self.nx + fi as usize]
+        let k = fj as usize * self.nx + fi as usize;
+        let [a, b, c] = self.upper[k];
+        self.zmax[0].2[k].min(a * x + b * y + c)
     }
 
     /// True if some point of the polyline `line` (local frame; each segment sampled about every metre, at most
@@ -348,7 +399,8 @@ impl Surface {
         loop {
             let (w, h, z) = &self.zmax[level];
             let size = self.bin_m * (1u64 << level) as f64;
-            let to_i = |v: f64, origin: f64, n: usize| (((v - origin) / size).floor().max(0.0) as usize).min(n - 1);
+            // The floor clamped at 0, as in `bin_range`.
+            let to_i = |v: f64, origin: f64, n: usize| (((v - origin) / size) as usize).min(n - 1);
             let (i0, i1) = (to_i(x_lo, self.x0, *w), to_i(x_hi, self.x0, *w));
             let (j0, j1) = (to_i(y_lo, self.y0, *h), to_i(y_hi, self.y0, *h));
             if (i1 - i0 + 1) * (j1 - j0 + 1) <= 16 || level + 1 == self.zmax.len() {
@@ -425,6 +477,28 @@ fn triangle_overlaps_box(p: &[Vector3<f64>; 3], x0: f64, y0: f64, x1: f64, y1: f
         }
     }
     true
+}
+
+/// The part of the convex polygon `poly` inside the box [x0, x1] × [y0, y1] (Sutherland–Hodgman clipping; empty
+/// when they do not overlap).
+fn clip_to_box(poly: &[[f64; 2]], [x0, y0, x1, y1]: [f64; 4]) -> Vec<[f64; 2]> {
+    let mut out = poly.to_vec();
+    // Each half-plane as (axis, bound, keep the side above the bound).
+    for (axis, bound, above) in [(0, x0, true), (0, x1, false), (1, y0, true), (1, y1, false)] {
+        let inside = |p: &[f64; 2]| if above { p[axis] >= bound } else { p[axis] <= bound };
+        let input = std::mem::take(&mut out);
+        for (k, p) in input.iter().enumerate() {
+            let q = &input[(k + 1) % input.len()];
+            if inside(p) {
+                out.push(*p);
+            }
+            if inside(p) != inside(q) {
+                let f = (bound - p[axis]) / (q[axis] - p[axis]);
+                out.push([p[0] + f * (q[0] - p[0]), p[1] + f * (q[1] - p[1])]);
+            }
+        }
+    }
+    out
 }
 
 /// The point of triangle (a, b, c) nearest to p (Ericson, Real-Time Collision Detection, §5.1.5).
@@ -507,6 +581,57 @@ mod tests {
             assert!(m <= 0.5 * b.min(10.0) + 2.0, "{a} {b} {m}: too loose");
         }
         assert_eq!(s.max_height_in(20.0, 30.0, 20.0, 30.0), s.max_height_in(20.0, 30.0, 20.0, 30.0));
+    }
+
+    #[test]
+    fn the_bin_bound_lies_above_the_surface_and_hugs_a_plane() {
+        // On a plane the bound is the plane (within its micrometre margin), where the bin's highest point is up
+        // to a bin's rise above it.
+        let s = tilted(20);
+        for &(x, y) in &[(0.3, 0.3), (4.99, 7.2), (9.9, 0.1)] {
+            let bound = s.upper_bound_at(x, y);
+            assert!(bound >= 0.5 * x && bound < 0.5 * x + 1e-5, "{x} {y}: {bound}");
+        }
+        assert_eq!(s.upper_bound_at(-1.0, 5.0), f64::NEG_INFINITY);
+        // A bumpy grid and a coarse irregular mesh whose triangles span many bins: never below the surface.
+        let mut v = Vec::new();
+        for j in 0..=12 {
+            for i in 0..=12 {
+                let (x, y) = (i as f64, j as f64);
+                v.push(Vector3::new(x, y, 0.7 * x + (1.3 * x).sin() * (0.9 * y).cos() + 0.2 * ((i * j) % 3) as f64));
+            }
+        }
+        let id = |i: usize, j: usize| (j * 13 + i) as u32;
+        let grid: Vec<[u32; 3]> = (0..12 * 12)
+            .flat_map(|k| {
+                let (i, j) = (k % 12, k / 12);
+                [[id(i, j), id(i + 1, j), id(i + 1, j + 1)], [id(i, j), id(i + 1, j + 1), id(i, j + 1)]]
+            })
+            .collect();
+        let coarse = vec![
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(40.0, 3.0, 25.0),
+            Vector3::new(7.0, 35.0, -4.0),
+            Vector3::new(38.0, 41.0, 12.0),
+            Vector3::new(20.0, 18.0, 30.0),
+            Vector3::new(1.0, 1.0, 0.5),
+        ];
+        let fan = [[4, 0, 1], [4, 1, 3], [4, 3, 2], [4, 2, 0], [5, 0, 1]];
+        for s in [Surface::new(v, &grid).unwrap().0, Surface::new(coarse, &fan).unwrap().0] {
+            let (x0, y0, x1, y1) = s.bounds_xy();
+            let mut checked = 0;
+            for k in 0..40_000 {
+                // An irrational lattice over the surface's box.
+                let (fx, fy) = ((k as f64 * 0.618_033_988_75) % 1.0, (k as f64 * 0.414_213_562_37) % 1.0);
+                let (x, y) = (x0 + fx * (x1 - x0), y0 + fy * (y1 - y0));
+                if let Some(p) = s.at(x, y) {
+                    let bound = s.upper_bound_at(x, y);
+                    assert!(p.z_m <= bound, "({x}, {y}): ground {} above the bound {bound}", p.z_m);
+                    checked += 1;
+                }
+            }
+            assert!(checked > 10_000, "{checked}");
+        }
     }
 
     #[test]
