@@ -244,26 +244,26 @@ impl Surface {
         let a = tris.iter().map(|&t| self.planes[t as usize].a).sum::<f64>() / n;
         let b = tris.iter().map(|&t| self.planes[t as usize].b).sum::<f64>() / n;
         let (i, j) = (k % self.nx, k / self.nx);
-        let eps = 1e-9 * self.bin_m;
-        let (bx, by) = (self.x0 + i as f64 * self.bin_m - eps, self.y0 + j as f64 * self.bin_m - eps);
-        let side = self.bin_m + 2.0 * eps;
+        let (bx, by) = (self.x0 + i as f64 * self.bin_m, self.y0 + j as f64 * self.bin_m);
         let (mut c, mut margin) = (f64::NEG_INFINITY, 0.0f64);
         for &t in &tris {
             let p = &self.planes[t as usize];
             let corners =
                 self.triangles[t as usize].map(|v| [self.vertices[v as usize].x, self.vertices[v as usize].y]);
-            let mut part = clip_to_box(&corners, [bx, by, bx + side, by + side]);
+            // How far outside its footprint `at` may count a point as inside (1e-9 of its size), with rounding: the
+            // bin is widened by ten times that, so the triangle's point nearest such a point lies in the part kept.
+            let size = corners.iter().flat_map(|u| corners.iter().map(move |v| (u[0] - v[0]).hypot(u[1] - v[1])));
+            let reach = 1e-8 * (size.fold(0.0, f64::max) + self.bin_m + 1.0);
+            let widened = [bx - reach, by - reach, bx + self.bin_m + reach, by + self.bin_m + reach];
+            let mut part = clip_to_box(&corners, widened);
             if part.is_empty() {
-                // Touching the bin only within the tolerance: its own corners are as near.
+                // No point of the bin is counted as inside it; its own corners bound it all the same.
                 part = corners.to_vec();
             }
             for [x, y] in part {
                 c = c.max(p.a * x + p.b * y + p.c - a * x - b * y);
             }
-            // The gradient of the triangle's height above the plane, times how far outside its footprint a point
-            // may be counted as inside (1e-9 of its size, `at`) or misplaced by rounding.
-            let size = corners.iter().flat_map(|u| corners.iter().map(move |v| (u[0] - v[0]).hypot(u[1] - v[1])));
-            let reach = 1e-8 * (size.fold(0.0, f64::max) + self.bin_m + 1.0);
+            // The triangle's height above the plane may rise by its gradient times that reach.
             margin = margin.max(((p.a - a).abs() + (p.b - b).abs()) * reach);
         }
         [a, b, c + margin + 1e-6]
