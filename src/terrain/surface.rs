@@ -4,7 +4,8 @@
 //! way does it face? Every triangle is binned by its horizontal bounding box into a uniform grid; a query tests the
 //! few triangles of one bin. Where several triangles lie over one point (an overhang), the highest is the surface:
 //! talus treats terrain as 2.5D, like DEM-based codes (RAMMS, Rockyfor3D). A pyramid of per-bin maximum heights
-//! bounds the ground under a whole rectangle, which lets free-flying rocks take long exact steps.
+//! bounds the ground under a whole rectangle, which lets free-flying rocks take long exact steps; a plane per bin
+//! bounds it under a point, which settles most hull vertices of a rock on a slope without a triangle test.
 //!
 //! # Units
 //! Metres, in the terrain's local frame (origin subtracted, z up).
