@@ -54,8 +54,9 @@ pub struct Surface {
     /// Max-height pyramid; level 0 has nx × ny bins, each next level halves both sizes (rounded up).
     zmax: Vec<(usize, usize, Vec<f64>)>,
     /// Per bin, a plane (a, b, c) with z ≤ a·x + b·y + c for every triangle of the bin over the bin: on a slope far
-    /// tighter than the bin's highest point (`c` infinite where the bin has no triangle with a footprint).
-    upper: Vec<[f64; 3]>,
+    /// tighter than the bin's highest point (`c` infinite where the bin has no triangle with a footprint). Single
+    /// precision, half the memory: `c` is computed with the rounded slopes and rounded up.
+    upper: Vec<[f32; 3]>,
     z_min_m: f64,
     z_max_m: f64,
     extent: (f64, f64, f64, f64),
@@ -232,18 +233,21 @@ impl Surface {
     /// the highest of them at the corners of its part in the bin (where a linear function over a convex polygon
     /// peaks), plus a margin for rounding and for the small tolerance with which [`Surface::at`] counts a point on
     /// a triangle's edge as inside it.
-    fn upper_plane(&self, k: usize) -> [f64; 3] {
+    fn upper_plane(&self, k: usize) -> [f32; 3] {
         let tris: Vec<u32> = self.items[self.offsets[k] as usize..self.offsets[k + 1] as usize]
             .iter()
             .copied()
             .filter(|&t| !self.planes[t as usize].vertical)
             .collect();
         if tris.is_empty() {
-            return [0.0, 0.0, f64::INFINITY];
+            return [0.0, 0.0, f32::INFINITY];
         }
         let n = tris.len() as f64;
-        let a = tris.iter().map(|&t| self.planes[t as usize].a).sum::<f64>() / n;
-        let b = tris.iter().map(|&t| self.planes[t as usize].b).sum::<f64>() / n;
+        // The slopes as stored, so that the offset below is computed for them.
+        let slope =
+            |f: fn(&TriPlane) -> f64| (tris.iter().map(|&t| f(&self.planes[t as usize])).sum::<f64>() / n) as f32;
+        let (a32, b32) = (slope(|p| p.a), slope(|p| p.b));
+        let (a, b) = (a32 as f64, b32 as f64);
         let (i, j) = (k % self.nx, k / self.nx);
         let (bx, by) = (self.x0 + i as f64 * self.bin_m, self.y0 + j as f64 * self.bin_m);
         let (mut c, mut margin) = (f64::NEG_INFINITY, 0.0f64);
@@ -267,7 +271,12 @@ impl Surface {
             // The triangle's height above the plane may rise by its gradient times that reach.
             margin = margin.max(((p.a - a).abs() + (p.b - b).abs()) * reach);
         }
-        [a, b, c + margin + 1e-6]
+        let offset = c + margin + 1e-6;
+        let mut c32 = offset as f32;
+        if (c32 as f64) < offset {
+            c32 = c32.next_up();
+        }
+        [a32, b32, c32]
     }
 
     /// The surface under (x, y): the highest triangle whose footprint holds the point. `None` over holes and
@@ -316,7 +325,7 @@ impl Surface {
         }
         let k = fj as usize * self.nx + fi as usize;
         let [a, b, c] = self.upper[k];
-        self.zmax[0].2[k].min(a * x + b * y + c)
+        self.zmax[0].2[k].min(a as f64 * x + b as f64 * y + c as f64)
     }
 
     /// True if some point of the polyline `line` (local frame; each segment sampled about every metre, at most
