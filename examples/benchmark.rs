@@ -6,8 +6,9 @@
 //! ```
 //! Cases: the bench stack (`examples/bench_stack.toml`), the Tyrol crop (`examples/tyrol.toml`), the same Tyrol
 //! rocks on the crop refined by bilinear interpolation to about 10^4, 10^5 and 10^6 triangles, and the calibrated
-//! Tschamut model (`examples/calibrated_tschamut.toml`: the field releases, the simulations a calibration runs). Each case runs in its
-//! own process so that its peak memory (VmHWM) is its own; rocks/s is given for all cores and per core.
+//! Tschamut model (`examples/calibrated_tschamut.toml`: the field releases, the simulations a calibration runs).
+//! Each case runs in its own process so that its peak memory (VmHWM) is its own; rocks/s is given for all cores and
+//! per core.
 
 use std::path::Path;
 use std::time::Instant;

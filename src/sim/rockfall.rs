@@ -539,7 +539,8 @@ impl<'a> Run<'a> {
     }
 
     /// Depth, normal and triangle of the ground at the world point `p` if it lies below it, after the cheap
-    /// rejections against `top` ([`Run::ground_top_under`]) and the bound of its bin ([`crate::terrain::surface::Surface::upper_bound_at`]).
+    /// rejections against `top` ([`Run::ground_top_under`]) and the bound of its bin
+    /// ([`crate::terrain::surface::Surface::upper_bound_at`]).
     fn vertex_penetration(&self, p: &Vector3<f64>, top: f64) -> Option<(f64, Vector3<f64>, u32)> {
         let surface = &self.terrain.surface;
         if p.z > top || p.z > surface.upper_bound_at(p.x, p.y) {

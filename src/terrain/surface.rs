@@ -234,38 +234,39 @@ impl Surface {
     /// peaks), plus a margin for rounding and for the small tolerance with which [`Surface::at`] counts a point on
     /// a triangle's edge as inside it.
     fn upper_plane(&self, k: usize) -> [f32; 3] {
-        let tris: Vec<u32> = self.items[self.offsets[k] as usize..self.offsets[k + 1] as usize]
-            .iter()
-            .copied()
-            .filter(|&t| !self.planes[t as usize].vertical)
-            .collect();
-        if tris.is_empty() {
+        let tris = || {
+            self.items[self.offsets[k] as usize..self.offsets[k + 1] as usize]
+                .iter()
+                .map(|&t| t as usize)
+                .filter(|&t| !self.planes[t].vertical)
+        };
+        let n = tris().count() as f64;
+        if n == 0.0 {
             return [0.0, 0.0, f32::INFINITY];
         }
-        let n = tris.len() as f64;
         // The slopes as stored, so that the offset below is computed for them.
-        let slope =
-            |f: fn(&TriPlane) -> f64| (tris.iter().map(|&t| f(&self.planes[t as usize])).sum::<f64>() / n) as f32;
+        let slope = |f: fn(&TriPlane) -> f64| (tris().map(|t| f(&self.planes[t])).sum::<f64>() / n) as f32;
         let (a32, b32) = (slope(|p| p.a), slope(|p| p.b));
         let (a, b) = (a32 as f64, b32 as f64);
         let (i, j) = (k % self.nx, k / self.nx);
         let (bx, by) = (self.x0 + i as f64 * self.bin_m, self.y0 + j as f64 * self.bin_m);
         let (mut c, mut margin) = (f64::NEG_INFINITY, 0.0f64);
-        for &t in &tris {
-            let p = &self.planes[t as usize];
-            let corners =
-                self.triangles[t as usize].map(|v| [self.vertices[v as usize].x, self.vertices[v as usize].y]);
-            // How far outside its footprint `at` may count a point as inside (1e-9 of its size), with rounding: the
-            // bin is widened by ten times that, so the triangle's point nearest such a point lies in the part kept.
-            let size = corners.iter().flat_map(|u| corners.iter().map(move |v| (u[0] - v[0]).hypot(u[1] - v[1])));
+        for t in tris() {
+            let p = &self.planes[t];
+            let corners = self.triangles[t].map(|v| [self.vertices[v as usize].x, self.vertices[v as usize].y]);
+            // How far outside its footprint `at` may count a point as inside (1e-9 of its size, its longest edge),
+            // with rounding: the bin is widened by ten times that, so the triangle's point nearest such a point lies
+            // in the part kept.
+            let size = (0..3).map(|e| {
+                let (u, v) = (corners[e], corners[(e + 1) % 3]);
+                (u[0] - v[0]).hypot(u[1] - v[1])
+            });
             let reach = 1e-8 * (size.fold(0.0, f64::max) + self.bin_m + 1.0);
             let widened = [bx - reach, by - reach, bx + self.bin_m + reach, by + self.bin_m + reach];
-            let mut part = clip_to_box(&corners, widened);
-            if part.is_empty() {
-                // No point of the bin is counted as inside it; its own corners bound it all the same.
-                part = corners.to_vec();
-            }
-            for [x, y] in part {
+            let (clipped, len) = clip_to_box(&corners, widened);
+            // With nothing kept, no point of the bin is counted as inside it; its own corners bound it all the same.
+            let part = if len == 0 { &corners[..] } else { &clipped[..len] };
+            for &[x, y] in part {
                 c = c.max(p.a * x + p.b * y + p.c - a * x - b * y);
             }
             // The triangle's height above the plane may rise by its gradient times that reach.
@@ -279,20 +280,23 @@ impl Surface {
         [a32, b32, c32]
     }
 
-    /// The surface under (x, y): the highest triangle whose footprint holds the point. `None` over holes and
-    /// outside the surface.
+    /// The index of the bin holding (x, y), `None` outside the grid.
     #[inline]
-    pub fn at(&self, x: f64, y: f64) -> Option<SurfacePoint> {
+    fn bin_at(&self, x: f64, y: f64) -> Option<usize> {
         let fi = (x - self.x0) / self.bin_m;
         let fj = (y - self.y0) / self.bin_m;
         if !(fi >= 0.0 && fj >= 0.0) {
             return None;
         }
         let (i, j) = (fi as usize, fj as usize);
-        if i >= self.nx || j >= self.ny {
-            return None;
-        }
-        let k = j * self.nx + i;
+        (i < self.nx && j < self.ny).then_some(j * self.nx + i)
+    }
+
+    /// The surface under (x, y): the highest triangle whose footprint holds the point. `None` over holes and
+    /// outside the surface.
+    #[inline]
+    pub fn at(&self, x: f64, y: f64) -> Option<SurfacePoint> {
+        let k = self.bin_at(x, y)?;
         let mut best: Option<(f64, u32)> = None;
         for &t in &self.items[self.offsets[k] as usize..self.offsets[k + 1] as usize] {
             let p = &self.planes[t as usize];
@@ -318,12 +322,7 @@ impl Surface {
     /// the ground.
     #[inline]
     pub fn upper_bound_at(&self, x: f64, y: f64) -> f64 {
-        let fi = (x - self.x0) / self.bin_m;
-        let fj = (y - self.y0) / self.bin_m;
-        if !(fi >= 0.0 && fj >= 0.0) || fi as usize >= self.nx || fj as usize >= self.ny {
-            return f64::NEG_INFINITY;
-        }
-        let k = fj as usize * self.nx + fi as usize;
+        let Some(k) = self.bin_at(x, y) else { return f64::NEG_INFINITY };
         let [a, b, c] = self.upper[k];
         self.zmax[0].2[k].min(a as f64 * x + b as f64 * y + c as f64)
     }
@@ -489,26 +488,37 @@ fn triangle_overlaps_box(p: &[Vector3<f64>; 3], x0: f64, y0: f64, x1: f64, y1: f
     true
 }
 
-/// The part of the convex polygon `poly` inside the box [x0, x1] × [y0, y1] (Sutherland–Hodgman clipping; empty
-/// when they do not overlap).
-fn clip_to_box(poly: &[[f64; 2]], [x0, y0, x1, y1]: [f64; 4]) -> Vec<[f64; 2]> {
-    let mut out = poly.to_vec();
-    // Each half-plane as (axis, bound, keep the side above the bound).
-    for (axis, bound, above) in [(0, x0, true), (0, x1, false), (1, y0, true), (1, y1, false)] {
+/// The part of the triangle `tri` inside the box [x0, x1] × [y0, y1] (Sutherland–Hodgman clipping), as its
+/// corners and their count (0 when they do not overlap). A cut of a convex polygon adds at most one corner, and of
+/// any polygon (should rounding bend it) at most doubles them: 3·2⁴ = 48 at most, kept on the stack (a terrain of
+/// 10⁶ triangles clips about four million times as it is built).
+fn clip_to_box(tri: &[[f64; 2]; 3], [x0, y0, x1, y1]: [f64; 4]) -> ([[f64; 2]; 48], usize) {
+    // Two buffers, each cut reading one and writing the other (no copies of them).
+    let (mut a, mut b) = ([[0.0; 2]; 48], [[0.0; 2]; 48]);
+    a[..3].copy_from_slice(tri);
+    let mut len = 3;
+    // Each half-plane as (axis, bound, keep the side above the bound); four cuts leave the result in `a`.
+    for (cut, (axis, bound, above)) in
+        [(0, x0, true), (0, x1, false), (1, y0, true), (1, y1, false)].into_iter().enumerate()
+    {
+        let (input, out) = if cut % 2 == 0 { (&a, &mut b) } else { (&b, &mut a) };
         let inside = |p: &[f64; 2]| if above { p[axis] >= bound } else { p[axis] <= bound };
-        let input = std::mem::take(&mut out);
-        for (k, p) in input.iter().enumerate() {
-            let q = &input[(k + 1) % input.len()];
+        let n = len;
+        len = 0;
+        for k in 0..n {
+            let (p, q) = (&input[k], &input[(k + 1) % n]);
             if inside(p) {
-                out.push(*p);
+                out[len] = *p;
+                len += 1;
             }
             if inside(p) != inside(q) {
                 let f = (bound - p[axis]) / (q[axis] - p[axis]);
-                out.push([p[0] + f * (q[0] - p[0]), p[1] + f * (q[1] - p[1])]);
+                out[len] = [p[0] + f * (q[0] - p[0]), p[1] + f * (q[1] - p[1])];
+                len += 1;
             }
         }
     }
-    out
+    (a, len)
 }
 
 /// The point of triangle (a, b, c) nearest to p (Ericson, Real-Time Collision Detection, §5.1.5).
