@@ -30,6 +30,7 @@
 //! min_improvement = 0.05    # relative cut of the cross-validated mean CRPS to keep an effect
 //! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
 //! # screen_repeats = 20     # simulations per run in the loop's grid screening (default: repeats)
+//! race_repeats = 4          # a first look at every grid setting; the folds' best go on to screen_repeats (0: off)
 //! one_se_rule = true        # of the effects that pass, the simplest within one standard error of the best
 //! restart_arms = false     # each arm also tries its effect from the start point of the materials
 //! # fit_arms = true         # each effect arm also fitted again per inner fold (default: 2DLM yes, 3DRB no)
@@ -286,6 +287,11 @@ pub struct EffectsConfig {
     /// does not share the baseline's draw; 20 make the screening fair without making the population fit dearer
     /// (docs/calibration.md, "Speed against angle and place").
     pub screen_repeats: Option<usize>,
+    /// Simulations per run of each grid setting's first look in the screening's race (default 4; 0, or at least
+    /// `screen_repeats`, simulates every setting at `screen_repeats`, as until 2026-11-29). After the first look each
+    /// inner fold keeps its few best settings on its training runs, and only those are simulated on to
+    /// `screen_repeats` and compared (ours; see [`super::effects_loop`]).
+    pub race_repeats: usize,
     /// Among the effects that pass, keep the one with the fewest added parameters whose out-of-fold CRPS is within
     /// one standard error of the best one's (default true; false: the largest cut, as until 2026-11-25).
     pub one_se_rule: bool,
@@ -319,6 +325,7 @@ impl Default for EffectsConfig {
             refit_evaluations: None,
             cv_refit_evaluations: None,
             screen_repeats: None,
+            race_repeats: 4,
             one_se_rule: true,
             restart_arms: false,
             fit_arms: None,
@@ -517,6 +524,15 @@ impl CalibrationConfig {
     /// Simulations per run of each setting in the effects loop's grid screening.
     pub fn screen_repeats(&self) -> usize {
         self.effects.screen_repeats.unwrap_or(self.repeats)
+    }
+
+    /// Simulations per run of a grid setting's first look in the loop's screening: `effects.race_repeats` when it
+    /// races (between 1 and `screen_repeats`), otherwise all `screen_repeats`.
+    pub fn first_look_repeats(&self) -> usize {
+        match self.effects.race_repeats {
+            r @ 1.. if r < self.screen_repeats() => r,
+            _ => self.screen_repeats(),
+        }
     }
 
     /// These settings with the budgets left out filled in for `model` (as the report records them).

@@ -27,12 +27,13 @@
 //! (the screening stage of multi-level multi-start methods, Rinnooy Kan & Timmer 1987, Math. Program. 39: 27–56).
 
 use super::config::CalibrationConfig;
-use super::model::{evaluate, Model, RunSims};
+use super::model::{evaluate, evaluate_repeats, Model, RunSims};
 use super::objective::score;
 use super::params::{Candidate, FreeParam};
 use super::search::{nelder_mead, SearchResult};
 use super::stats::shuffle;
 use crate::random::{stream, uniform};
+use std::ops::Range;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// What the fitting steps share: the model, the settings, a progress sink and a simulation counter.
@@ -56,6 +57,12 @@ impl<'a> Context<'a> {
     /// Simulates `which` runs `repeats` times under `candidate` (see [`evaluate`]) and counts the simulations.
     pub fn sims(&self, candidate: &Candidate, which: &[usize], repeats: usize) -> crate::Result<Vec<RunSims>> {
         self.sims_seeded(candidate, which, repeats, self.cfg.seed)
+    }
+
+    /// [`Context::sims`] of the repeats numbered `repeats` only (see [`evaluate_repeats`]).
+    pub fn sims_repeats(&self, c: &Candidate, which: &[usize], repeats: Range<usize>) -> crate::Result<Vec<RunSims>> {
+        self.simulations.fetch_add(which.len() * repeats.len(), Ordering::Relaxed);
+        evaluate_repeats(self.model, c, which, repeats, self.cfg.seed, self.cfg.threads)
     }
 
     fn sims_seeded(&self, c: &Candidate, which: &[usize], repeats: usize, seed: u64) -> crate::Result<Vec<RunSims>> {

@@ -18,6 +18,11 @@
 //!   current model's typical impact (median impact speed, median impact angle; the mass effect is neutral at the
 //!   median mass), so that the effect changes how restitution varies, not its typical level (ours).
 //!
+//! The effect and zone arms *race* their settings (`race_repeats`, default 4; ours, after Maron & Moore 1997): every
+//! setting is first simulated `race_repeats` times per run, each inner fold keeps its three best on its training
+//! runs, and only those go on to `screen_repeats` (the first look's simulations are their first repeats); a zone arm
+//! of 24 candidate regions × 10 settings then simulates about a quarter of what it did.
+//!
 //! In each fold, each arm picks the setting with the best objective on the other folds' runs, and the fold's own
 //! runs are predicted with it. That gives every calibration run an out-of-fold error under each arm: a cheap
 //! screening. The error is the run's CRPS (continuous ranked probability score, [`super::metrics::crps`]): a proper
@@ -285,10 +290,11 @@ pub fn effects_loop(
                 }
                 let mut arm = Arm::default();
                 for c in cands {
-                    arm.screen(ctx, cal, c)?;
+                    arm.glance(ctx, cal, c)?;
                 }
                 arm.fold_settings = vec![(0..arm.settings.len()).collect(); cfg.inner_folds];
                 arm.full = (0..arm.settings.len()).collect();
+                arm.race(ctx, cal, &fold_of, &prop.label, |c, r| ctx.sims_repeats(&screened(ctx, c), cal, r))?;
                 if cfg.fit_arms(model.kind()) && prop.def.param.is_some() {
                     let from = effect(&current, values[values.len() / 2]);
                     arm.add_fitted(ctx, &from, &effect_free, cal, &fold_of, &format!("{} fitted", prop.label))?;
@@ -953,6 +959,10 @@ fn zone_free(ctx: &Context, label: &str) -> Vec<FreeParam> {
         .collect()
 }
 
+/// Settings each inner fold (and the choice on all calibration runs) carries from the race's first look to the full
+/// screening (ours; docs/calibration.md, "The screening's race").
+const RACE_KEEP: usize = 3;
+
 /// The settings of one arm of the comparison: simulations of all calibration runs per setting, the candidate of
 /// each, which settings each fold may choose, and which ones count for the choice on all calibration runs.
 #[derive(Default)]
@@ -970,6 +980,69 @@ impl Arm {
         self.settings.push(ctx.sims(&screened(ctx, &c), cal, ctx.cfg.screen_repeats())?);
         self.cands.push(c);
         Ok(self.settings.len() - 1)
+    }
+
+    /// Adds candidate `c` with its simulations of the calibration runs `cal` for its first look in the race (the
+    /// first [`CalibrationConfig::first_look_repeats`] of its `screen_repeats`); returns its setting's index.
+    fn glance(&mut self, ctx: &Context, cal: &[usize], c: Candidate) -> crate::Result<usize> {
+        self.settings.push(ctx.sims_repeats(&screened(ctx, &c), cal, 0..ctx.cfg.first_look_repeats())?);
+        self.cands.push(c);
+        Ok(self.settings.len() - 1)
+    }
+
+    /// The race (ours, after the racing algorithms of model selection, Maron & Moore 1997): of the settings at their
+    /// first look, each inner fold keeps the [`RACE_KEEP`] with the best objective on its training runs, and the
+    /// choice on all calibration runs likewise; those are simulated on to `screen_repeats` (`more(candidate,
+    /// repeats)` simulates the repeats numbered `repeats`: the first look's simulations are their first repeats, with
+    /// the same random numbers), and the others are dropped from every fold's choice. A setting no fold keeps after
+    /// a few repeats is rarely the one it would choose after all of them, and the choice is then scored out of fold
+    /// at the full repeats. Settings simulated in full from the start take part as they are.
+    fn race(
+        &mut self,
+        ctx: &Context,
+        cal: &[usize],
+        fold_of: &[usize],
+        label: &str,
+        more: impl Fn(&Candidate, std::ops::Range<usize>) -> crate::Result<Vec<RunSims>>,
+    ) -> crate::Result<()> {
+        let (first, full) = (ctx.cfg.first_look_repeats(), ctx.cfg.screen_repeats());
+        let short = |settings: &[Vec<RunSims>], s: usize| settings[s].first().is_some_and(|r| r.sims.len() < full);
+        let glanced = (0..self.settings.len()).filter(|&s| short(&self.settings, s)).count();
+        if glanced == 0 {
+            return Ok(());
+        }
+        let runs = ctx.model.runs();
+        let best = |pool: &[usize], which: &[usize]| -> Vec<usize> {
+            let mut scored: Vec<(f64, usize)> = pool
+                .iter()
+                .filter(|&&s| short(&self.settings, s))
+                .map(|&s| {
+                    (score_of(ctx.cfg, runs, &which.iter().map(|&j| &self.settings[s][j]).collect::<Vec<_>>()), s)
+                })
+                .collect();
+            scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            scored.into_iter().take(RACE_KEEP).map(|(_, s)| s).collect()
+        };
+        let mut kept = std::collections::BTreeSet::new();
+        for (f, pool) in self.fold_settings.iter().enumerate() {
+            kept.extend(best(pool, &(0..cal.len()).filter(|&j| fold_of[j] != f).collect::<Vec<_>>()));
+        }
+        kept.extend(best(&self.full, &(0..cal.len()).collect::<Vec<_>>()));
+        (ctx.log)(&format!(
+            "  {label}: {glanced} settings at a first look of {first} repeats, {} of them on to {full}",
+            kept.len()
+        ));
+        for &s in &kept {
+            let rest = more(&self.cands[s], first..full)?;
+            for (mine, r) in self.settings[s].iter_mut().zip(rest) {
+                mine.sims.extend(r.sims);
+            }
+        }
+        let settings = &self.settings;
+        for pool in self.fold_settings.iter_mut().chain(std::iter::once(&mut self.full)) {
+            pool.retain(|&s| !short(settings, s));
+        }
+        Ok(())
     }
 
     /// Adds `free` fitted from `from` as the baseline was ([`fit_population`]): on each inner fold's training runs,
@@ -1087,7 +1160,7 @@ fn zone_arm(
                     ));
                     for &(z, drag) in &settings {
                         let c = with_zone(model, base, label, region, z, drag);
-                        let sims = sims_reusing(ctx, &c, cal, reference, region)?;
+                        let sims = sims_reusing(ctx, &c, cal, reference, region, 0..cfg.first_look_repeats())?;
                         let (n, all) = not_at_rest(&sims);
                         unrested = (unrested.0 + n, unrested.1 + all);
                         arm.settings.push(sims);
@@ -1100,6 +1173,9 @@ fn zone_arm(
             chosen.extend(first..first + settings.len());
         }
     }
+    let region_of =
+        |c: &Candidate| c.effect(label).and_then(|e| e.region.clone()).expect("a zone setting has its region");
+    arm.race(ctx, cal, fold_of, label, |c, r| sims_reusing(ctx, c, cal, reference, &region_of(c), r))?;
     if let (zone, zone_all @ 1..) = unrested {
         let (base, base_all) = not_at_rest(reference);
         (ctx.log)(&format!(
@@ -1117,15 +1193,16 @@ fn zone_arm(
     Ok(arm)
 }
 
-/// Simulates `cal` under `c`, reusing `reference` (the same candidate without the zone) for every simulation whose
-/// path keeps clear of the region's bounding box (with a margin of two map cells plus 3 m: more than a zone
-/// triangle reaches beyond the region, plus a rock's reach and the path thinning).
+/// Simulates `cal` under `c` (the repeats numbered `repeats`), reusing `reference` (the same candidate without the
+/// zone) for every simulation whose path keeps clear of the region's bounding box (with a margin of two map cells
+/// plus 3 m: more than a zone triangle reaches beyond the region, plus a rock's reach and the path thinning).
 fn sims_reusing(
     ctx: &Context,
     c: &Candidate,
     cal: &[usize],
     reference: &[RunSims],
     region: &Region,
+    repeats: std::ops::Range<usize>,
 ) -> crate::Result<Vec<RunSims>> {
     let [x0, y0, x1, y1] = region.bbox();
     // Zone triangles are those whose centre lies in the region: they reach about a cell beyond it.
@@ -1138,7 +1215,9 @@ fn sims_reusing(
                 && (p[1] as f64) <= y1 + margin
         })
     };
-    let needed: Vec<(usize, usize)> = reference
+    let mut out: Vec<RunSims> =
+        reference.iter().map(|rs| RunSims { run: rs.run, sims: rs.repeats_in(repeats.clone()).to_vec() }).collect();
+    let needed: Vec<(usize, usize)> = out
         .iter()
         .enumerate()
         .flat_map(|(j, rs)| rs.sims.iter().enumerate().filter(|(_, s)| near(s)).map(move |(r, _)| (j, r)))
@@ -1148,9 +1227,8 @@ fn sims_reusing(
     ctx.simulations.fetch_add(needed.len(), std::sync::atomic::Ordering::Relaxed);
     let fresh = crate::parallel::collect_in_order(needed.len(), ctx.cfg.threads, |k| {
         let (j, r) = needed[k];
-        super::model::as_measured(ctx.model, prepared.as_ref(), &runs[cal[j]], r, ctx.cfg.seed)
+        super::model::as_measured(ctx.model, prepared.as_ref(), &runs[cal[j]], repeats.start + r, ctx.cfg.seed)
     });
-    let mut out = reference.to_vec();
     for ((j, r), s) in needed.into_iter().zip(fresh) {
         out[j].sims[r] = s;
     }
@@ -1302,6 +1380,69 @@ mod tests {
         let free = CalibrationConfig::default();
         let ctx = Context::new(&model, &free, &quiet);
         assert_eq!(screened(&ctx, &c), c);
+    }
+
+    #[test]
+    fn the_race_carries_each_folds_best_first_looks_on_to_the_full_repeats() {
+        use crate::calibrate::synthetic::{case_2d, synthetic_2d};
+        let model = synthetic_2d(&case_2d("control_a", 1).unwrap(), crate::lumped2d::Options2d::default()).unwrap();
+        let cal: Vec<usize> = (0..model.runs().len()).collect();
+        let fold_of = folds(model.runs(), &cal, 3, 1, 1);
+        let quiet = |_: &str| {};
+        let arm_of = |cfg: &CalibrationConfig| {
+            let ctx = Context::new(&model, cfg, &quiet);
+            let (base, _) = crate::calibrate::base_candidate(&model, cfg);
+            let mut arm = Arm::default();
+            for m in [0.5, 0.7, 0.85, 1.0, 1.2, 1.44, 2.0] {
+                let mut c = base.clone();
+                c.params.set(MOBILITY, m);
+                arm.glance(&ctx, &cal, c).unwrap();
+            }
+            arm.fold_settings = vec![(0..arm.settings.len()).collect(); 3];
+            arm.full = (0..arm.settings.len()).collect();
+            let first: Vec<Vec<RunSims>> = arm.settings.clone();
+            arm.race(&ctx, &cal, &fold_of, "test", |c, r| ctx.sims_repeats(&screened(&ctx, c), &cal, r)).unwrap();
+            (arm, first, ctx.simulations.load(Ordering::Relaxed))
+        };
+        let cfg = CalibrationConfig::default();
+        assert_eq!((cfg.first_look_repeats(), cfg.screen_repeats()), (4, 20));
+        let (arm, first, simulated) = arm_of(&cfg);
+        let ctx = Context::new(&model, &cfg, &quiet);
+        let runs = model.runs();
+        let mut carried = std::collections::BTreeSet::new();
+        for f in 0..=3 {
+            let (pool, train): (&[usize], Vec<usize>) = if f < 3 {
+                (&arm.fold_settings[f], (0..cal.len()).filter(|&j| fold_of[j] != f).collect())
+            } else {
+                (&arm.full, (0..cal.len()).collect())
+            };
+            // The fold's three best first looks go on, and only settings simulated in full stay to be chosen.
+            let mut ranked: Vec<(f64, usize)> = (0..first.len())
+                .map(|s| (score_of(&cfg, runs, &train.iter().map(|&j| &first[s][j]).collect::<Vec<_>>()), s))
+                .collect();
+            ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
+            for &(_, s) in &ranked[..RACE_KEEP] {
+                assert!(pool.contains(&s), "fold {f}: setting {s} of {ranked:?} not carried on");
+            }
+            assert!(pool.iter().all(|&s| arm.settings[s].iter().all(|r| r.sims.len() == 20)), "fold {f}");
+            carried.extend(pool.iter().copied());
+        }
+        assert!(carried.len() < arm.settings.len(), "the race dropped nothing: {carried:?}");
+        // Carried on with the same random numbers: the 20 repeats are those a full screening simulates.
+        for &s in &carried {
+            let full = ctx.sims(&screened(&ctx, &arm.cands[s]), &cal, 20).unwrap();
+            for (a, b) in arm.settings[s].iter().zip(&full) {
+                let runouts = |r: &RunSims| r.sims.iter().map(|x| x.runout_m).collect::<Vec<_>>();
+                assert_eq!(runouts(a), runouts(b), "setting {s}, run {}", a.run);
+            }
+        }
+        let n = cal.len();
+        assert_eq!(simulated, 7 * n * 4 + carried.len() * n * 16);
+        // Off: every setting at the full repeats and every one in every fold's choice.
+        let mut off = CalibrationConfig::default();
+        off.effects.race_repeats = 0;
+        let (arm, _, simulated) = arm_of(&off);
+        assert_eq!((arm.fold_settings[0].len(), arm.full.len(), simulated), (7, 7, 7 * n * 20));
     }
 
     #[test]

@@ -13,6 +13,7 @@ use super::stats::{median, quantile_sorted, sorted};
 use crate::campaign::TrackPoint;
 use crate::error::Result;
 use crate::raster::Grid;
+use std::ops::Range;
 use std::path::Path;
 
 /// What a simulated path looked like, for the residual diagnosis.
@@ -371,30 +372,30 @@ pub fn evaluate(
     seed: u64,
     threads: usize,
 ) -> Result<Vec<RunSims>> {
-    let prepared = model.prepare(candidate)?;
-    Ok(evaluate_prepared(model, prepared.as_ref(), which, repeats, seed, threads))
+    evaluate_repeats(model, candidate, which, 0..repeats, seed, threads)
 }
 
-/// [`evaluate`] with a prepared model.
-pub fn evaluate_prepared(
+/// [`evaluate`] of the repeats numbered `repeats` only: each repeat draws its own random numbers (from the run,
+/// its number and `seed`), so repeats `a..b` are those that `evaluate` with `b` repeats ends with.
+pub fn evaluate_repeats(
     model: &dyn Model,
-    prepared: &dyn Prepared,
+    candidate: &Candidate,
     which: &[usize],
-    repeats: usize,
+    repeats: Range<usize>,
     seed: u64,
     threads: usize,
-) -> Vec<RunSims> {
+) -> Result<Vec<RunSims>> {
+    let prepared = model.prepare(candidate)?;
     let runs = model.runs();
-    let n = which.len() * repeats;
-    let flat = crate::parallel::collect_in_order(n, threads, |k| {
-        let (i, r) = (which[k / repeats], k % repeats);
-        as_measured(model, prepared, &runs[i], r, seed)
+    let n = repeats.len();
+    let flat = crate::parallel::collect_in_order(which.len() * n, threads, |k| {
+        as_measured(model, prepared.as_ref(), &runs[which[k / n]], repeats.start + k % n, seed)
     });
-    let mut out: Vec<RunSims> = which.iter().map(|&i| RunSims { run: i, sims: Vec::with_capacity(repeats) }).collect();
+    let mut out: Vec<RunSims> = which.iter().map(|&i| RunSims { run: i, sims: Vec::with_capacity(n) }).collect();
     for (k, s) in flat.into_iter().enumerate() {
-        out[k / repeats].sims.push(s);
+        out[k / n].sims.push(s);
     }
-    out
+    Ok(out)
 }
 
 /// Keeps the path points every `spacing_m` of horizontal travel (and always the last point).
