@@ -27,7 +27,7 @@
 //! (the screening stage of multi-level multi-start methods, Rinnooy Kan & Timmer 1987, Math. Program. 39: 27–56).
 
 use super::config::CalibrationConfig;
-use super::model::{evaluate, evaluate_repeats, Model, RunSims};
+use super::model::{evaluate_repeats, Model, RunSims};
 use super::objective::score;
 use super::params::{Candidate, FreeParam};
 use super::search::{nelder_mead, SearchResult};
@@ -54,20 +54,26 @@ impl<'a> Context<'a> {
         Context { model, cfg, log, simulations: AtomicUsize::new(0) }
     }
 
-    /// Simulates `which` runs `repeats` times under `candidate` (see [`evaluate`]) and counts the simulations.
+    /// Simulates `which` runs `repeats` times under `candidate` (see [`super::model::evaluate`]) and counts the
+    /// simulations.
     pub fn sims(&self, candidate: &Candidate, which: &[usize], repeats: usize) -> crate::Result<Vec<RunSims>> {
-        self.sims_seeded(candidate, which, repeats, self.cfg.seed)
+        self.sims_repeats(candidate, which, 0..repeats)
     }
 
     /// [`Context::sims`] of the repeats numbered `repeats` only (see [`evaluate_repeats`]).
     pub fn sims_repeats(&self, c: &Candidate, which: &[usize], repeats: Range<usize>) -> crate::Result<Vec<RunSims>> {
-        self.simulations.fetch_add(which.len() * repeats.len(), Ordering::Relaxed);
-        evaluate_repeats(self.model, c, which, repeats, self.cfg.seed, self.cfg.threads)
+        self.sims_seeded(c, which, repeats, self.cfg.seed)
     }
 
-    fn sims_seeded(&self, c: &Candidate, which: &[usize], repeats: usize, seed: u64) -> crate::Result<Vec<RunSims>> {
-        self.simulations.fetch_add(which.len() * repeats, Ordering::Relaxed);
-        evaluate(self.model, c, which, repeats, seed, self.cfg.threads)
+    fn sims_seeded(
+        &self,
+        c: &Candidate,
+        which: &[usize],
+        repeats: Range<usize>,
+        seed: u64,
+    ) -> crate::Result<Vec<RunSims>> {
+        self.simulations.fetch_add(which.len() * repeats.len(), Ordering::Relaxed);
+        evaluate_repeats(self.model, c, which, repeats, seed, self.cfg.threads)
     }
 
     /// The objective of `candidate` on `which` runs with the search repeats (infinite if the candidate is
@@ -77,7 +83,7 @@ impl<'a> Context<'a> {
     }
 
     fn objective_seeded(&self, c: &Candidate, which: &[usize], repeats: usize, seed: u64) -> f64 {
-        match self.sims_seeded(c, which, repeats, seed) {
+        match self.sims_seeded(c, which, 0..repeats, seed) {
             Ok(s) => score(self.cfg, self.model.runs(), &s),
             Err(_) => f64::INFINITY,
         }

@@ -237,7 +237,7 @@ pub fn effects_loop(
         for &m in &MOBILITY_GRID {
             let mut c = current.clone();
             c.params.set(MOBILITY, m);
-            base_arm.screen(ctx, cal, c)?;
+            base_arm.screen(ctx, cal, c, cfg.screen_repeats())?;
         }
         base_arm.fold_settings = vec![(0..base_arm.settings.len()).collect(); cfg.inner_folds];
         // With the arms fitted again, so is the baseline: an effect is credited only with what the baseline fitted
@@ -290,7 +290,7 @@ pub fn effects_loop(
                 }
                 let mut arm = Arm::default();
                 for c in cands {
-                    arm.glance(ctx, cal, c)?;
+                    arm.screen(ctx, cal, c, cfg.first_look_repeats())?;
                 }
                 arm.fold_settings = vec![(0..arm.settings.len()).collect(); cfg.inner_folds];
                 arm.full = (0..arm.settings.len()).collect();
@@ -810,10 +810,8 @@ fn cross_validate(
     let mut chosen = vec![0; k];
     for f in 0..k {
         let train: Vec<usize> = (0..cal.len()).filter(|&j| fold_of[j] != f).collect();
-        let scored: Vec<(usize, f64)> = fold_settings[f]
-            .iter()
-            .map(|&s| (s, score_of(ctx.cfg, runs, &train.iter().map(|&j| &settings[s][j]).collect::<Vec<_>>())))
-            .collect();
+        let scored: Vec<(usize, f64)> =
+            fold_settings[f].iter().map(|&s| (s, score_on(ctx.cfg, runs, &settings[s], &train))).collect();
         let best = scored.iter().min_by(|a, b| a.1.total_cmp(&b.1)).map(|x| x.0).unwrap_or(0);
         chosen[f] = best;
         for j in (0..cal.len()).filter(|&j| fold_of[j] == f) {
@@ -822,6 +820,12 @@ fn cross_validate(
         }
     }
     (errors, chosen)
+}
+
+/// The objective of a setting's simulations `setting` (one per calibration run) on the calibration runs numbered
+/// `which` (indices into `setting`).
+fn score_on(cfg: &CalibrationConfig, runs: &[FieldRun], setting: &[RunSims], which: &[usize]) -> f64 {
+    score_of(cfg, runs, &which.iter().map(|&j| &setting[j]).collect::<Vec<_>>())
 }
 
 /// One run's out-of-fold errors.
@@ -974,18 +978,11 @@ struct Arm {
 }
 
 impl Arm {
-    /// Adds candidate `c` with its simulations of the calibration runs `cal` for the screening (`screen_repeats`
-    /// each); returns its setting's index.
-    fn screen(&mut self, ctx: &Context, cal: &[usize], c: Candidate) -> crate::Result<usize> {
-        self.settings.push(ctx.sims(&screened(ctx, &c), cal, ctx.cfg.screen_repeats())?);
-        self.cands.push(c);
-        Ok(self.settings.len() - 1)
-    }
-
-    /// Adds candidate `c` with its simulations of the calibration runs `cal` for its first look in the race (the
-    /// first [`CalibrationConfig::first_look_repeats`] of its `screen_repeats`); returns its setting's index.
-    fn glance(&mut self, ctx: &Context, cal: &[usize], c: Candidate) -> crate::Result<usize> {
-        self.settings.push(ctx.sims_repeats(&screened(ctx, &c), cal, 0..ctx.cfg.first_look_repeats())?);
+    /// Adds candidate `c` with `repeats` simulations of each calibration run in `cal`: `screen_repeats` for a
+    /// setting simulated in full, [`CalibrationConfig::first_look_repeats`] for one that races ([`Arm::race`]);
+    /// returns its setting's index.
+    fn screen(&mut self, ctx: &Context, cal: &[usize], c: Candidate, repeats: usize) -> crate::Result<usize> {
+        self.settings.push(ctx.sims(&screened(ctx, &c), cal, repeats)?);
         self.cands.push(c);
         Ok(self.settings.len() - 1)
     }
@@ -1016,9 +1013,7 @@ impl Arm {
             let mut scored: Vec<(f64, usize)> = pool
                 .iter()
                 .filter(|&&s| short(&self.settings, s))
-                .map(|&s| {
-                    (score_of(ctx.cfg, runs, &which.iter().map(|&j| &self.settings[s][j]).collect::<Vec<_>>()), s)
-                })
+                .map(|&s| (score_on(ctx.cfg, runs, &self.settings[s], which), s))
                 .collect();
             scored.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
             scored.into_iter().take(RACE_KEEP).map(|(_, s)| s).collect()
@@ -1066,7 +1061,7 @@ impl Arm {
             let train: Vec<usize> = (0..cal.len()).filter(|&j| f == k || fold_of[j] != f).map(|j| cal[j]).collect();
             let (c, search, _) = fit_population(&inner, from, free, &train, what);
             objectives.push(search.f);
-            let s = self.screen(ctx, cal, c)?;
+            let s = self.screen(ctx, cal, c, ctx.cfg.screen_repeats())?;
             if f < k {
                 self.fold_settings[f].push(s);
             } else {
@@ -1396,7 +1391,7 @@ mod tests {
             for m in [0.5, 0.7, 0.85, 1.0, 1.2, 1.44, 2.0] {
                 let mut c = base.clone();
                 c.params.set(MOBILITY, m);
-                arm.glance(&ctx, &cal, c).unwrap();
+                arm.screen(&ctx, &cal, c, cfg.first_look_repeats()).unwrap();
             }
             arm.fold_settings = vec![(0..arm.settings.len()).collect(); 3];
             arm.full = (0..arm.settings.len()).collect();
@@ -1417,9 +1412,8 @@ mod tests {
                 (&arm.full, (0..cal.len()).collect())
             };
             // The fold's three best first looks go on, and only settings simulated in full stay to be chosen.
-            let mut ranked: Vec<(f64, usize)> = (0..first.len())
-                .map(|s| (score_of(&cfg, runs, &train.iter().map(|&j| &first[s][j]).collect::<Vec<_>>()), s))
-                .collect();
+            let mut ranked: Vec<(f64, usize)> =
+                (0..first.len()).map(|s| (score_on(&cfg, runs, &first[s], &train), s)).collect();
             ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
             for &(_, s) in &ranked[..RACE_KEEP] {
                 assert!(pool.contains(&s), "fold {f}: setting {s} of {ranked:?} not carried on");
