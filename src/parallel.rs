@@ -39,11 +39,15 @@ where
             }
             return;
         }
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok();
+        // All cores: rayon's global pool, started once; a thread count of its own: a pool for this call.
+        let pool = (threads != 0).then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()).flatten();
         let mut start = 0;
         while start < n {
             let end = (start + chunk).min(n);
-            let compute = || (start..end).into_par_iter().map(&f).collect::<Vec<T>>();
+            // Split down to single items (ours): rayon otherwise stops splitting at about four pieces per thread
+            // unless one is stolen, and a thread left with a piece of costly items (a calibration's items come in run
+            // order, and some runs cost ten times others) keeps the other cores idle until it is done.
+            let compute = || (start..end).into_par_iter().with_max_len(1).map(&f).collect::<Vec<T>>();
             let results = match &pool {
                 Some(p) => p.install(compute),
                 None => compute(),
