@@ -95,7 +95,7 @@ mod tests {
 
     #[test]
     fn order_is_kept_for_any_thread_count() {
-        for threads in [1, 2, 3] {
+        for threads in [0, 1, 2, 3] {
             let mut seen = Vec::new();
             map_in_order(100, threads, 7, |i| i * i, |i, r| seen.push((i, r)));
             assert_eq!(seen, (0..100).map(|i| (i, i * i)).collect::<Vec<_>>());
