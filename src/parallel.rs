@@ -39,7 +39,8 @@ where
             }
             return;
         }
-        // All cores: rayon's global pool, started once; a thread count of its own: a pool for this call.
+        // Threads 0: the pool we run in (rayon's global pool, started once, unless the caller installed one); a
+        // thread count of its own: a pool for this call.
         let pool = (threads != 0).then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()).flatten();
         let mut start = 0;
         while start < n {
