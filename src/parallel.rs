@@ -39,9 +39,10 @@ where
             }
             return;
         }
-        // Threads 0: the pool we run in (rayon's global pool, started once, unless the caller installed one); a
-        // thread count of its own: a pool for this call.
-        let pool = (threads != 0).then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()).flatten();
+        // The pool we run in (rayon's global pool, started once, unless the caller installed one) when it has the
+        // threads asked for (0: all it has); a pool for this call only for another count.
+        let own = threads != 0 && threads != rayon::current_num_threads();
+        let pool = own.then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build().ok()).flatten();
         let mut start = 0;
         while start < n {
             let end = (start + chunk).min(n);
