@@ -46,12 +46,20 @@ pub struct Context<'a> {
     pub log: &'a (dyn Fn(&str) + Sync),
     /// Simulations run so far.
     pub simulations: AtomicUsize,
+    /// When the context was made, for the pace of [`Context::time_for`].
+    started: std::time::Instant,
 }
 
 impl<'a> Context<'a> {
     /// A context.
     pub fn new(model: &'a dyn Model, cfg: &'a CalibrationConfig, log: &'a (dyn Fn(&str) + Sync)) -> Self {
-        Context { model, cfg, log, simulations: AtomicUsize::new(0) }
+        Context { model, cfg, log, simulations: AtomicUsize::new(0), started: std::time::Instant::now() }
+    }
+
+    /// How long `n` more simulations take at the pace so far, for the progress log ("about 4 min at 150
+    /// simulations/s"); empty before the pace is known.
+    pub fn time_for(&self, n: usize) -> String {
+        time_at_pace(n, self.simulations.load(Ordering::Relaxed), self.started.elapsed().as_secs_f64())
     }
 
     /// Simulates `which` runs `repeats` times under `candidate` (see [`super::model::evaluate`]) and counts the
@@ -88,6 +96,17 @@ impl<'a> Context<'a> {
             Err(_) => f64::INFINITY,
         }
     }
+}
+
+/// How long `n` simulations take at the pace of `done` in `secs` (empty below 100 done: no pace yet).
+fn time_at_pace(n: usize, done: usize, secs: f64) -> String {
+    if done < 100 || secs <= 0.0 {
+        return String::new();
+    }
+    let pace = done as f64 / secs;
+    let t = n as f64 / pace;
+    let when = if t < 90.0 { format!("{t:.0} s") } else { format!("{:.0} min", t / 60.0) };
+    format!(", about {when} at the pace so far ({pace:.0} simulations/s)")
 }
 
 /// `start` with the free parameters set from unit coordinates `u`.
@@ -281,5 +300,13 @@ mod tests {
         // Seeded: the same seed gives the same points, another seed others.
         assert_eq!(start_points(&x0, 5, 7), p);
         assert_ne!(start_points(&x0, 5, 8), p);
+    }
+
+    #[test]
+    fn the_time_left_is_read_off_the_pace_so_far() {
+        assert_eq!(time_at_pace(5000, 99, 1.0), "");
+        assert_eq!(time_at_pace(5000, 1000, 0.0), "");
+        assert_eq!(time_at_pace(6000, 1500, 10.0), ", about 40 s at the pace so far (150 simulations/s)");
+        assert_eq!(time_at_pace(61_440, 15_000, 100.0), ", about 7 min at the pace so far (150 simulations/s)");
     }
 }

@@ -288,6 +288,13 @@ pub fn effects_loop(
                 if let Some(from) = &restart_from {
                     cands.extend(values.iter().map(|&v| effect(from, v)));
                 }
+                let first_looks = cands.len() * cal.len() * cfg.first_look_repeats();
+                (ctx.log)(&format!(
+                    "  {}: {} settings, {first_looks} simulations for their first looks{}",
+                    prop.label,
+                    cands.len(),
+                    ctx.time_for(first_looks)
+                ));
                 let mut arm = Arm::default();
                 for c in cands {
                     arm.screen(ctx, cal, c, cfg.first_look_repeats())?;
@@ -319,11 +326,11 @@ pub fn effects_loop(
             let (before, after) = if screening_cut >= cfg.effects.min_improvement && full.effect(&prop.label).is_some()
             {
                 if e0_refit.is_none() {
-                    (ctx.log)("  refitting the baseline in each fold");
+                    (ctx.log)(&format!("  refitting the baseline in each fold{}", refit_cv_time(ctx, cal.len())));
                     let starts: Vec<Candidate> = base_chosen.iter().map(|&c| folded(ctx, &base_arm.cands[c])).collect();
                     e0_refit = Some(refit_cv(ctx, &starts, &free, cal, &fold_of, &format!("round {round} baseline"))?);
                 }
-                (ctx.log)(&format!("  refitting {} in each fold", prop.label));
+                (ctx.log)(&format!("  refitting {} in each fold{}", prop.label, refit_cv_time(ctx, cal.len())));
                 let starts: Vec<Candidate> = chosen.iter().map(|&c| folded(ctx, &arm.cands[c])).collect();
                 (
                     e0_refit.clone().unwrap_or_default(),
@@ -603,6 +610,15 @@ fn screened(ctx: &Context, c: &Candidate) -> Candidate {
     } else {
         c.clone()
     }
+}
+
+/// [`refit_cv`]'s simulations on `n` calibration runs (each fold's evaluations on its training runs, then its
+/// runs predicted), and how long they take at the pace so far.
+fn refit_cv_time(ctx: &Context, n: usize) -> String {
+    let cfg = ctx.cfg;
+    let k = cfg.inner_folds.max(1);
+    let fits = (k - 1) * n * cfg.cv_refit_evaluations(ctx.model.kind()) * cfg.search_repeats;
+    ctx.time_for(fits + n * cfg.repeats)
 }
 
 /// Refitting cross-validation: in each fold, `free` is refitted from `starts[f]` on the other folds' runs
@@ -1123,6 +1139,15 @@ fn zone_arm(
         }
         fold_regions.push(ids);
     }
+    // At most: a region's settings reuse the simulations whose path keeps clear of it.
+    let first_looks = distinct.len() * settings.len() * cal.len() * cfg.first_look_repeats();
+    (ctx.log)(&format!(
+        "  {label}: {} candidate regions from the folds, {} settings each: at most {first_looks} simulations for \
+         their first looks{}",
+        distinct.len(),
+        settings.len(),
+        ctx.time_for(first_looks)
+    ));
     // Where each distinct region's settings start in the arm, once simulated.
     let mut first_setting: Vec<Option<usize>> = vec![None; distinct.len()];
     for (f, regions) in fold_regions.iter().enumerate() {

@@ -295,14 +295,10 @@ impl Model for Model3d {
 
     fn dominant_material(&self, region: &Region) -> String {
         let mut count = vec![0usize; self.materials.len()];
-        for t in 0..self.terrain.triangle_material.len() as u32 {
-            let [a, b, c] = self.terrain.surface.corners(t);
-            let centre = (a + b + c) / 3.0 + self.terrain.origin;
-            if region.contains(centre.x, centre.y) {
-                let m = self.terrain.triangle_material[t as usize] as usize;
-                if m < count.len() {
-                    count[m] += 1;
-                }
+        for t in triangles_in(&self.terrain, region) {
+            let m = self.terrain.triangle_material[t as usize] as usize;
+            if m < count.len() {
+                count[m] += 1;
             }
         }
         let best = (0..count.len()).max_by_key(|&k| (count[k], std::cmp::Reverse(k))).unwrap_or(0);
@@ -363,6 +359,15 @@ impl Model for Model3d {
     }
 }
 
+/// The triangles of `terrain` a zone over `region` takes: those whose centre lies in it.
+fn triangles_in<'a>(terrain: &'a Terrain, region: &'a Region) -> impl Iterator<Item = u32> + 'a {
+    (0..terrain.triangle_material.len() as u32).filter(move |&t| {
+        let [a, b, c] = terrain.surface.corners(t);
+        let centre = (a + b + c) / 3.0 + terrain.origin;
+        region.contains(centre.x, centre.y)
+    })
+}
+
 impl Model3d {
     /// The terrain with the candidate's materials (and zones), the engine settings with its effects, and the zones
     /// it adds as the scenario declares them.
@@ -415,12 +420,8 @@ impl Model3d {
                     }
                     terrain.materials.push(Self::material(p, &e.label, &e.label, m)?);
                     let idx = (terrain.materials.len() - 1) as u16;
-                    for t in 0..terrain.triangle_material.len() as u32 {
-                        let [a, b, c] = terrain.surface.corners(t);
-                        let centre = (a + b + c) / 3.0 + terrain.origin;
-                        if region.contains(centre.x, centre.y) {
-                            terrain.triangle_material[t as usize] = idx;
-                        }
+                    for t in triangles_in(&self.terrain, region) {
+                        terrain.triangle_material[t as usize] = idx;
                     }
                 }
                 EffectKind::CrspRotation => {
