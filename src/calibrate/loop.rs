@@ -1139,15 +1139,25 @@ fn zone_arm(
         }
         fold_regions.push(ids);
     }
-    // At most: a region's settings reuse the simulations whose path keeps clear of it.
-    let first_looks = distinct.len() * settings.len() * cal.len() * cfg.first_look_repeats();
+    // A region's settings simulate again only the reference's simulations whose path comes near it.
+    let looks = 0..cfg.first_look_repeats();
+    let near_sims: usize = distinct
+        .iter()
+        .map(|region| {
+            let near = nears(ctx, region);
+            reference.iter().map(|rs| rs.repeats_in(looks.clone()).iter().filter(|s| near(s)).count()).sum::<usize>()
+        })
+        .sum();
+    let first_looks = settings.len() * near_sims;
     (ctx.log)(&format!(
-        "  {label}: {} candidate regions from the folds, {} settings each: at most {first_looks} simulations for \
-         their first looks{}",
+        "  {label}: {} candidate regions from the folds, {} settings each: {first_looks} simulations for their first \
+         looks (of {}: the others keep clear of their region){}",
         distinct.len(),
         settings.len(),
+        distinct.len() * settings.len() * cal.len() * looks.len(),
         ctx.time_for(first_looks)
     ));
+    let simulated_before = ctx.simulations.load(std::sync::atomic::Ordering::Relaxed);
     // Where each distinct region's settings start in the arm, once simulated.
     let mut first_setting: Vec<Option<usize>> = vec![None; distinct.len()];
     for (f, regions) in fold_regions.iter().enumerate() {
@@ -1193,6 +1203,7 @@ fn zone_arm(
             chosen.extend(first..first + settings.len());
         }
     }
+    debug_assert_eq!(ctx.simulations.load(std::sync::atomic::Ordering::Relaxed) - simulated_before, first_looks);
     let region_of =
         |c: &Candidate| c.effect(label).and_then(|e| e.region.clone()).expect("a zone setting has its region");
     arm.race(ctx, cal, fold_of, label, |c, r| sims_reusing(ctx, c, cal, reference, &region_of(c), r))?;
@@ -1213,9 +1224,24 @@ fn zone_arm(
     Ok(arm)
 }
 
+/// Whether a simulation's path comes near `region`: into its bounding box widened by two map cells plus 3 m (more
+/// than a zone triangle reaches beyond the region, plus a rock's reach and the path thinning).
+fn nears(ctx: &Context, region: &Region) -> impl Fn(&Sim) -> bool {
+    let [x0, y0, x1, y1] = region.bbox();
+    // Zone triangles are those whose centre lies in the region: they reach about a cell beyond it.
+    let margin = 2.0 * ctx.model.map_frame().cell_m + 3.0;
+    move |s: &Sim| {
+        s.path.iter().any(|p| {
+            (p[0] as f64) >= x0 - margin
+                && (p[0] as f64) <= x1 + margin
+                && (p[1] as f64) >= y0 - margin
+                && (p[1] as f64) <= y1 + margin
+        })
+    }
+}
+
 /// Simulates `cal` under `c` (the repeats numbered `repeats`), reusing `reference` (the same candidate without the
-/// zone) for every simulation whose path keeps clear of the region's bounding box (with a margin of two map cells
-/// plus 3 m: more than a zone triangle reaches beyond the region, plus a rock's reach and the path thinning).
+/// zone) for every simulation whose path keeps clear of the region ([`nears`]).
 fn sims_reusing(
     ctx: &Context,
     c: &Candidate,
@@ -1224,17 +1250,7 @@ fn sims_reusing(
     region: &Region,
     repeats: std::ops::Range<usize>,
 ) -> crate::Result<Vec<RunSims>> {
-    let [x0, y0, x1, y1] = region.bbox();
-    // Zone triangles are those whose centre lies in the region: they reach about a cell beyond it.
-    let margin = 2.0 * ctx.model.map_frame().cell_m + 3.0;
-    let near = |s: &Sim| {
-        s.path.iter().any(|p| {
-            (p[0] as f64) >= x0 - margin
-                && (p[0] as f64) <= x1 + margin
-                && (p[1] as f64) >= y0 - margin
-                && (p[1] as f64) <= y1 + margin
-        })
-    };
+    let near = nears(ctx, region);
     let mut out: Vec<RunSims> =
         reference.iter().map(|rs| RunSims { run: rs.run, sims: rs.repeats_in(repeats.clone()).to_vec() }).collect();
     let needed: Vec<(usize, usize)> = out
