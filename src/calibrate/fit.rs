@@ -120,7 +120,7 @@ pub fn with_unit(start: &Candidate, free: &[FreeParam], u: &[f64]) -> Candidate 
 }
 
 /// The unit coordinates of `free` in `c` (a parameter `c` leaves unset at the middle of its bounds).
-fn unit_of(c: &Candidate, free: &[FreeParam]) -> Vec<f64> {
+pub fn unit_of(c: &Candidate, free: &[FreeParam]) -> Vec<f64> {
     free.iter().map(|p| p.to_unit(c.params.get_or(&p.name, 0.5 * (p.min + p.max)))).collect()
 }
 
