@@ -33,6 +33,7 @@
 //! race_repeats = 4          # a first look at every grid setting; the folds' best go on to screen_repeats (0: off)
 //! one_se_rule = true        # of the effects that pass, the simplest within one standard error of the best
 //! restart_arms = false     # each arm also tries its effect from the start point of the materials
+//! refit_check = false      # a fold's refit counts only if it beats its start on fresh repeats
 //! # fit_arms = true         # each effect arm also fitted again per inner fold (default: 2DLM yes, 3DRB no)
 //! ```
 
@@ -301,6 +302,13 @@ pub struct EffectsConfig {
     /// around it cannot reach that valley, and a rival effect that fits from there wins (docs/calibration.md,
     /// "Scarring drag"). It adds one setting per effect value to every arm but the zone's.
     pub restart_arms: bool,
+    /// In the refitting cross-validation, a fold's refit is kept only if it also beats its start on fresh repeats of
+    /// the training runs, the screening's beyond the search's (default false; ours). It stops a refit chosen on
+    /// `search_repeats` repeats from making an arm worse on its own draws; on Tschamut's first try it also turned
+    /// down, by 0.05 m, the one refit that carried round 2's baseline, and the loop then added vegetation drag and
+    /// roughness with a dynamic friction of 5°, in 44 % more simulations (docs/calibration.md, "A fold's refit kept
+    /// only if it beats its start on fresh repeats").
+    pub refit_check: bool,
     /// Each arm of an effect with a parameter also fits the model with the effect again, as the population fit
     /// fitted the baseline (its start points and screening), on each inner fold's training runs and on all
     /// calibration runs, and offers those fits to the screening beside the re-centred grid; the baseline's arm gets
@@ -328,6 +336,7 @@ impl Default for EffectsConfig {
             race_repeats: 4,
             one_se_rule: true,
             restart_arms: false,
+            refit_check: false,
             fit_arms: None,
         }
     }

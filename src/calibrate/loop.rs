@@ -628,11 +628,11 @@ fn refit_cv_time(ctx: &Context, n: usize) -> String {
 /// (`cv_refit_evaluations` objective evaluations), then the fold's runs are predicted. Returns per-run errors in
 /// the order of `cal`.
 ///
-/// A refit is kept only if it also beats its start on fresh repeats of the training runs (ours, as the population
-/// fit chooses between its searches): the search chooses on `search_repeats` repeats a run, and the best of a few
-/// dozen candidates on those repeats is partly the one that drew well on them (the winner's curse; on Tschamut, stop
-/// 61, the baseline's refits ended worse out of fold than their starts, 14.01 → 15.08 m, and inflated every
-/// effect's cut). The fresh repeats are the screening's beyond the search's (`search_repeats..screen_repeats`):
+/// With `[effects] refit_check`, a refit is kept only if it also beats its start on fresh repeats of the training
+/// runs (ours, as the population fit chooses between its searches): the search chooses on `search_repeats` repeats
+/// a run, and the best of a few dozen candidates on those repeats is partly the one that drew well on them (the
+/// winner's curse; on Tschamut, stop 61, the baseline's refits ended worse out of fold than their starts, 14.01 →
+/// 15.08 m, and inflated every effect's cut). The fresh repeats are the screening's beyond the search's (`search_repeats..screen_repeats`):
 /// `start_sims[f]` holds the start's (its setting's simulations of all calibration runs, order of `cal`), so only
 /// the refit's are simulated. With `screen_repeats ≤ search_repeats` there are none and every refit is kept.
 fn refit_cv(
@@ -670,7 +670,10 @@ fn refit_cv(
             let evaluations = ctx.cfg.cv_refit_evaluations(ctx.model.kind());
             let (c, search) = fit(ctx, start, &used, &train, evaluations, &what, ctx.cfg.seed);
             let moved = search.x != unit_of(start, &used);
-            if !moved || beats_its_start(ctx, &c, start_sims[f], cal, fold_of, f, &what)? {
+            if !moved
+                || !ctx.cfg.effects.refit_check
+                || beats_its_start(ctx, &c, start_sims[f], cal, fold_of, f, &what)?
+            {
                 c
             } else {
                 start.clone()
