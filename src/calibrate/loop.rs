@@ -632,9 +632,10 @@ fn refit_cv_time(ctx: &Context, n: usize) -> String {
 /// runs (ours, as the population fit chooses between its searches): the search chooses on `search_repeats` repeats
 /// a run, and the best of a few dozen candidates on those repeats is partly the one that drew well on them (the
 /// winner's curse; on Tschamut, stop 61, the baseline's refits ended worse out of fold than their starts, 14.01 →
-/// 15.08 m, and inflated every effect's cut). The fresh repeats are the screening's beyond the search's (`search_repeats..screen_repeats`):
-/// `start_sims[f]` holds the start's (its setting's simulations of all calibration runs, order of `cal`), so only
-/// the refit's are simulated. With `screen_repeats ≤ search_repeats` there are none and every refit is kept.
+/// 15.08 m, and inflated every effect's cut). The fresh repeats are the screening's beyond the search's
+/// (`search_repeats..screen_repeats`): `start_sims[f]` holds the start's (its setting's simulations of all
+/// calibration runs, order of `cal`), so only the refit's are simulated. With `screen_repeats ≤ search_repeats`
+/// there are none and every refit is kept.
 fn refit_cv(
     ctx: &Context,
     starts: &[Candidate],
@@ -1555,6 +1556,54 @@ mod tests {
         let ctx = Context::new(&model, &same, &quiet);
         assert!(beats_its_start(&ctx, &off, &truth_sims, &cal, &fold_of, 0, "test").unwrap());
         assert_eq!(ctx.simulations.load(Ordering::Relaxed), 0);
+    }
+
+    #[test]
+    fn with_the_refit_check_a_fold_turned_down_is_predicted_with_its_start() {
+        use crate::calibrate::synthetic::{case_2d, synthetic_2d, truth_2d};
+        use std::sync::Mutex;
+        let spec = case_2d("control_a", 1).unwrap();
+        let model = synthetic_2d(&spec, crate::lumped2d::Options2d::default()).unwrap();
+        let cal: Vec<usize> = (0..model.runs().len()).collect();
+        let fold_of = folds(model.runs(), &cal, 3, 1, 1);
+        let run = |check: bool| {
+            let mut cfg = CalibrationConfig::default();
+            (cfg.effects.refit_check, cfg.effects.cv_refit_evaluations) = (check, Some(12));
+            let lines = Mutex::new(Vec::new());
+            let log = |l: &str| lines.lock().unwrap().push(l.to_string());
+            let ctx = Context::new(&model, &cfg, &log);
+            // Fold 1 starts from the settings' start point, far off; folds 2 and 3 near the true model.
+            let (far, free) = crate::calibrate::base_candidate(&model, &cfg);
+            let mut near = truth_2d(&spec);
+            scale_cr(&mut near, 0.9);
+            let starts = vec![far, near.clone(), near];
+            let sims: Vec<Vec<RunSims>> =
+                starts.iter().map(|c| ctx.sims(c, &cal, cfg.screen_repeats()).unwrap()).collect();
+            let sims: Vec<&[RunSims]> = sims.iter().map(|s| s.as_slice()).collect();
+            let errors = refit_cv(&ctx, &starts, &sims, &free, &cal, &fold_of, "test").unwrap();
+            // Each run as its fold's start predicts it.
+            let by_start: Vec<CvError> = cal
+                .iter()
+                .map(|&j| {
+                    let s = &ctx.sims(&starts[fold_of[j]], &[j], cfg.repeats).unwrap()[0];
+                    CvError::of(&cfg, &model.runs()[s.run], s)
+                })
+                .collect();
+            let decisions: Vec<String> =
+                lines.into_inner().unwrap().into_iter().filter(|l| l.contains("on fresh repeats")).collect();
+            (errors, by_start, decisions)
+        };
+        let (_, _, none) = run(false);
+        assert!(none.is_empty(), "{none:?}");
+        let (errors, by_start, decisions) = run(true);
+        // Every fold whose search moved says what predicts it, and that is what does.
+        assert!(!decisions.is_empty());
+        for d in &decisions {
+            let f: usize =
+                d.split("fold ").nth(1).and_then(|x| x.split(':').next()).unwrap().parse::<usize>().unwrap() - 1;
+            let same = (0..cal.len()).filter(|&j| fold_of[j] == f).all(|j| errors[j] == by_start[j]);
+            assert_eq!(same, d.ends_with("the start predicts"), "{d}");
+        }
     }
 
     #[test]
