@@ -1559,7 +1559,7 @@ mod tests {
     }
 
     #[test]
-    fn with_the_refit_check_a_fold_turned_down_is_predicted_with_its_start() {
+    fn with_the_refit_check_each_fold_whose_search_moved_is_predicted_as_its_decision_says() {
         use crate::calibrate::synthetic::{case_2d, synthetic_2d, truth_2d};
         use std::sync::Mutex;
         let spec = case_2d("control_a", 1).unwrap();
