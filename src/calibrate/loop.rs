@@ -648,7 +648,8 @@ fn refit_cv(
     let runs = ctx.model.runs();
     let mut errors = vec![CvError { crps_m: f64::NAN, abs_m: f64::NAN }; cal.len()];
     for (f, start) in starts.iter().enumerate() {
-        let train: Vec<usize> = (0..cal.len()).filter(|&j| fold_of[j] != f).map(|j| cal[j]).collect();
+        let train_pos: Vec<usize> = (0..cal.len()).filter(|&j| fold_of[j] != f).collect();
+        let train: Vec<usize> = train_pos.iter().map(|&j| cal[j]).collect();
         let test_pos: Vec<usize> = (0..cal.len()).filter(|&j| fold_of[j] == f).collect();
         if test_pos.is_empty() {
             continue;
@@ -671,10 +672,7 @@ fn refit_cv(
             let evaluations = ctx.cfg.cv_refit_evaluations(ctx.model.kind());
             let (c, search) = fit(ctx, start, &used, &train, evaluations, &what, ctx.cfg.seed);
             let moved = search.x != unit_of(start, &used);
-            if !moved
-                || !ctx.cfg.effects.refit_check
-                || beats_its_start(ctx, &c, start_sims[f], cal, fold_of, f, &what)?
-            {
+            if !moved || !ctx.cfg.effects.refit_check || beats_its_start(ctx, &c, start_sims[f], &train_pos, &what)? {
                 c
             } else {
                 start.clone()
@@ -690,28 +688,27 @@ fn refit_cv(
     Ok(errors)
 }
 
-/// Whether refit `c` of fold `f` scores lower than its `start` on the fresh repeats of the fold's training runs (see
-/// [`refit_cv`]); true when there are none.
+/// Whether refit `c` scores lower than its start on the fresh repeats of the training runs (see [`refit_cv`]):
+/// `start_sims` are the start's simulations of the calibration runs, `train` the training runs' places among them;
+/// true when there are none.
 fn beats_its_start(
     ctx: &Context,
     c: &Candidate,
     start_sims: &[RunSims],
-    cal: &[usize],
-    fold_of: &[usize],
-    f: usize,
+    train: &[usize],
     what: &str,
 ) -> crate::Result<bool> {
     let fresh = ctx.cfg.search_repeats..ctx.cfg.screen_repeats();
     if fresh.is_empty() {
         return Ok(true);
     }
-    let train: Vec<usize> = (0..cal.len()).filter(|&j| fold_of[j] != f).collect();
     let runs = ctx.model.runs();
     let started: Vec<RunSims> = train
         .iter()
         .map(|&j| RunSims { run: start_sims[j].run, sims: start_sims[j].repeats_in(fresh.clone()).to_vec() })
         .collect();
-    let refit = score(ctx.cfg, runs, &ctx.sims_repeats(c, &train.iter().map(|&j| cal[j]).collect::<Vec<_>>(), fresh)?);
+    let which: Vec<usize> = started.iter().map(|s| s.run).collect();
+    let refit = score(ctx.cfg, runs, &ctx.sims_repeats(c, &which, fresh)?);
     let before = score(ctx.cfg, runs, &started);
     let kept = refit < before;
     (ctx.log)(&format!(
@@ -1533,7 +1530,7 @@ mod tests {
         let model = synthetic_2d(&spec, crate::lumped2d::Options2d::default()).unwrap();
         let cal: Vec<usize> = (0..model.runs().len()).collect();
         let fold_of = folds(model.runs(), &cal, 3, 1, 1);
-        let train = (0..cal.len()).filter(|&j| fold_of[j] != 0).count();
+        let train: Vec<usize> = (0..cal.len()).filter(|&j| fold_of[j] != 0).collect();
         let quiet = |_: &str| {};
         let cfg = CalibrationConfig::default();
         let ctx = Context::new(&model, &cfg, &quiet);
@@ -1545,16 +1542,16 @@ mod tests {
         let before = ctx.simulations.load(Ordering::Relaxed);
         // The true model beats a start with half its restitution, not the other way round, and a refit that ties its
         // start on the fresh repeats (here the start itself) is not kept.
-        assert!(beats_its_start(&ctx, &truth, &off_sims, &cal, &fold_of, 0, "test").unwrap());
-        assert!(!beats_its_start(&ctx, &off, &truth_sims, &cal, &fold_of, 0, "test").unwrap());
-        assert!(!beats_its_start(&ctx, &truth, &truth_sims, &cal, &fold_of, 0, "test").unwrap());
+        assert!(beats_its_start(&ctx, &truth, &off_sims, &train, "test").unwrap());
+        assert!(!beats_its_start(&ctx, &off, &truth_sims, &train, "test").unwrap());
+        assert!(!beats_its_start(&ctx, &truth, &truth_sims, &train, "test").unwrap());
         // Only the refit's fresh repeats of the training runs are simulated: the start's are the screening's.
-        assert_eq!(ctx.simulations.load(Ordering::Relaxed) - before, 3 * train * (20 - 4));
+        assert_eq!(ctx.simulations.load(Ordering::Relaxed) - before, 3 * train.len() * (20 - 4));
         // Without fresh repeats every refit is kept, and nothing is simulated.
         let mut same = CalibrationConfig::default();
         same.effects.screen_repeats = Some(same.search_repeats);
         let ctx = Context::new(&model, &same, &quiet);
-        assert!(beats_its_start(&ctx, &off, &truth_sims, &cal, &fold_of, 0, "test").unwrap());
+        assert!(beats_its_start(&ctx, &off, &truth_sims, &train, "test").unwrap());
         assert_eq!(ctx.simulations.load(Ordering::Relaxed), 0);
     }
 
