@@ -1317,6 +1317,18 @@ fn sims_reusing(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::calibrate::model2d::Model2d;
+    use crate::calibrate::synthetic::{case_2d, synthetic_2d, truth_2d, Synthetic2d};
+
+    /// The 2DLM `control_a` campaign (data seed 1) several tests run on: its spec, its model, all its runs as
+    /// calibration runs, and their three folds.
+    fn control_a_2d() -> (Synthetic2d, Model2d, Vec<usize>, Vec<usize>) {
+        let spec = case_2d("control_a", 1).unwrap();
+        let model = synthetic_2d(&spec, crate::lumped2d::Options2d::default()).unwrap();
+        let cal: Vec<usize> = (0..model.runs().len()).collect();
+        let fold_of = folds(model.runs(), &cal, 3, 1, 1);
+        (spec, model, cal, fold_of)
+    }
 
     #[test]
     fn the_one_se_rule_keeps_the_simplest_effect_that_fits_as_well_as_the_best() {
@@ -1438,8 +1450,7 @@ mod tests {
     fn folding_a_recentred_candidate_keeps_the_fixed_parameters_fixed() {
         // A 2DLM campaign with Rt fixed at 0.8: the mobility factor 1.44 moves Rn, Rt and friction; folded into the
         // materials, Rn and friction keep the move and Rt is back at 0.8.
-        use crate::calibrate::synthetic::{case_2d, synthetic_2d};
-        let model = synthetic_2d(&case_2d("control_a", 1).unwrap(), crate::lumped2d::Options2d::default()).unwrap();
+        let (_, model, _, _) = control_a_2d();
         let mut cfg = CalibrationConfig::default();
         cfg.materials.entry("ground".into()).or_default().insert("rt_mean".into(), ParamSetting::Fixed(0.8));
         let quiet = |_: &str| {};
@@ -1463,10 +1474,7 @@ mod tests {
 
     #[test]
     fn the_race_carries_each_folds_best_first_looks_on_to_the_full_repeats() {
-        use crate::calibrate::synthetic::{case_2d, synthetic_2d};
-        let model = synthetic_2d(&case_2d("control_a", 1).unwrap(), crate::lumped2d::Options2d::default()).unwrap();
-        let cal: Vec<usize> = (0..model.runs().len()).collect();
-        let fold_of = folds(model.runs(), &cal, 3, 1, 1);
+        let (_, model, cal, fold_of) = control_a_2d();
         let quiet = |_: &str| {};
         let arm_of = |cfg: &CalibrationConfig| {
             let ctx = Context::new(&model, cfg, &quiet);
@@ -1525,11 +1533,7 @@ mod tests {
 
     #[test]
     fn a_refit_is_kept_only_if_it_beats_its_start_on_fresh_repeats() {
-        use crate::calibrate::synthetic::{case_2d, synthetic_2d, truth_2d};
-        let spec = case_2d("control_a", 1).unwrap();
-        let model = synthetic_2d(&spec, crate::lumped2d::Options2d::default()).unwrap();
-        let cal: Vec<usize> = (0..model.runs().len()).collect();
-        let fold_of = folds(model.runs(), &cal, 3, 1, 1);
+        let (spec, model, cal, fold_of) = control_a_2d();
         let train: Vec<usize> = (0..cal.len()).filter(|&j| fold_of[j] != 0).collect();
         let quiet = |_: &str| {};
         let cfg = CalibrationConfig::default();
@@ -1557,12 +1561,8 @@ mod tests {
 
     #[test]
     fn with_the_refit_check_each_fold_whose_search_moved_is_predicted_as_its_decision_says() {
-        use crate::calibrate::synthetic::{case_2d, synthetic_2d, truth_2d};
         use std::sync::Mutex;
-        let spec = case_2d("control_a", 1).unwrap();
-        let model = synthetic_2d(&spec, crate::lumped2d::Options2d::default()).unwrap();
-        let cal: Vec<usize> = (0..model.runs().len()).collect();
-        let fold_of = folds(model.runs(), &cal, 3, 1, 1);
+        let (spec, model, cal, fold_of) = control_a_2d();
         let run = |check: bool| {
             let mut cfg = CalibrationConfig::default();
             (cfg.effects.refit_check, cfg.effects.cv_refit_evaluations) = (check, Some(12));
@@ -1605,8 +1605,7 @@ mod tests {
 
     #[test]
     fn a_restarted_arm_takes_the_materials_from_the_start_point_and_keeps_the_effects() {
-        use crate::calibrate::synthetic::{case_2d, synthetic_2d};
-        let model = synthetic_2d(&case_2d("control_a", 1).unwrap(), crate::lumped2d::Options2d::default()).unwrap();
+        let (_, model, _, _) = control_a_2d();
         let cfg = CalibrationConfig::default();
         let quiet = |_: &str| {};
         let ctx = Context::new(&model, &cfg, &quiet);
