@@ -1139,8 +1139,7 @@ impl Arm {
 
 /// The zone arm: candidate zones per fold from the training runs' deposition excess and overrun band, and from all
 /// calibration runs for the refit's start; each stepped over the zone mobility grid. Simulations whose path under
-/// the baseline setting stays away from the zone are taken from it (exact: same streams, same parameters, never
-/// touching the zone).
+/// the baseline setting stays away from the zone are taken from it ([`sims_reusing`]).
 fn zone_arm(
     ctx: &Context,
     base_arm: &Arm,
@@ -1284,7 +1283,11 @@ fn nears(ctx: &Context, region: &Region) -> impl Fn(&Sim) -> bool {
 }
 
 /// Simulates `cal` under `c` (the repeats numbered `repeats`), reusing `reference` (the same candidate without the
-/// zone) for every simulation whose path keeps clear of the region ([`nears`]).
+/// zone) for every simulation whose path keeps clear of the region ([`nears`]). A reused simulation is the one `c`
+/// would run (same parameters off the zone, never touching it) as long as the rock draws nothing after its
+/// per-material draws at release, as in the default 3DRB model and in 2DLM; with roughness, a dynamic-friction
+/// spread or Cr drawn per impact, the zone's own material draw moves the later draws of `c`'s stream, and the reused
+/// simulation is the same model on other random numbers.
 fn sims_reusing(
     ctx: &Context,
     c: &Candidate,

@@ -82,6 +82,8 @@ pub struct SolverSettings {
     pub bounce_threshold_mps: f64,
     /// Most sweeps.
     pub max_iterations: usize,
+    /// Largest impulse change of a sweep, as a velocity, below which the sweeps stop, m/s.
+    pub tolerance_mps: f64,
 }
 
 /// Reusable solver memory (one per rock run), so that a step allocates nothing.
@@ -173,7 +175,7 @@ pub fn solve(
             lambda_t,
         }
     }));
-    let (mut after, mut iterations) = sweep(rows, free, inv_m, settings.max_iterations);
+    let (mut after, mut iterations) = sweep(rows, free, inv_m, settings);
     // Contacts whose friction saturated the static cone and still slip: dynamic friction, solved again.
     let mut slipping = false;
     for r in rows.iter_mut() {
@@ -190,7 +192,7 @@ pub fn solve(
         }
     }
     if slipping {
-        let (again, it) = sweep(rows, free, inv_m, settings.max_iterations);
+        let (again, it) = sweep(rows, free, inv_m, settings);
         after = again;
         iterations += it;
     }
@@ -202,7 +204,7 @@ pub fn solve(
             r.lambda_n = 0.0;
             r.lambda_t = Vector2::zeros();
         }
-        let (again, it2) = sweep(rows, free, inv_m, settings.max_iterations);
+        let (again, it2) = sweep(rows, free, inv_m, settings);
         report.iterations += it2;
         report.energy_guard = true;
         after = again;
@@ -217,10 +219,7 @@ pub fn solve(
 /// above the solver's residual and below any slip that matters over a step.
 const SLIP_MPS: f64 = 1e-3;
 
-/// Velocity change below which the sweeps stop, m/s (ours): far below any velocity that matters to a rock's path.
-const CONVERGED_MPS: f64 = 1e-6;
-
-fn sweep(rows: &mut [Row], free: &Velocities, inv_m: f64, max_iterations: usize) -> (Velocities, usize) {
+fn sweep(rows: &mut [Row], free: &Velocities, inv_m: f64, settings: &SolverSettings) -> (Velocities, usize) {
     let mut v = free.linear_mps;
     let mut w = free.angular_body_radps;
     // Apply the warm-start impulses.
@@ -230,7 +229,7 @@ fn sweep(rows: &mut [Row], free: &Velocities, inv_m: f64, max_iterations: usize)
     }
     let n = rows.len();
     let mut used = 0;
-    for it in 0..max_iterations {
+    for it in 0..settings.max_iterations {
         used = it + 1;
         let mut change = 0.0f64;
         for k in 0..n {
@@ -258,7 +257,7 @@ fn sweep(rows: &mut [Row], free: &Velocities, inv_m: f64, max_iterations: usize)
             w += r.mt1 * dt.x + r.mt2 * dt.y;
             change = change.max(dn.abs() * r.k_nn).max((r.k_tt * dt).norm());
         }
-        if change <= CONVERGED_MPS {
+        if change <= settings.tolerance_mps {
             break;
         }
     }

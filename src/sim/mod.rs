@@ -8,5 +8,5 @@ pub mod rockfall;
 
 pub use barrier::{Barrier, BarrierHit};
 pub use body::RigidState;
-pub use params::{CrDraw, Effects, SimParams};
+pub use params::{CrDraw, Effects, SimParams, MAX_SOLVER_TOLERANCE_MPS};
 pub use rockfall::{simulate, Impact, Observer, Outcome, Sample, StopReason, GRAVITY_MPS2};

@@ -18,6 +18,10 @@ pub enum CrDraw {
 /// of 1e-12 m would take 10¹² samples per flight step and never finish.
 pub const MIN_SAMPLE_SPACING_M: f64 = 0.01;
 
+/// Largest `solver_tolerance_mps`, m/s (ours): a tenth of the slip speed above which the solver's stick test counts
+/// a contact as slipping (1 mm/s, [`super::contact`]), so that test reads a slip, not the solver's residual.
+pub const MAX_SOLVER_TOLERANCE_MPS: f64 = 1e-4;
+
 /// Most `impact_substeps` (ours: 64 sub-steps take a 2 ms impact step to about 0.03 ms).
 pub const MAX_IMPACT_SUBSTEPS: usize = 64;
 
@@ -61,6 +65,11 @@ pub struct SimParams {
     pub impact_substeps: usize,
     /// Most Gauss–Seidel sweeps of the contact solver (default: 100; sweeps stop earlier once converged).
     pub solver_iterations: usize,
+    /// The solver's sweeps stop once no contact impulse changed by more than this in a sweep, counted as the
+    /// velocity change it makes at its contact, m/s (default: 1e-6, ours: far below any velocity that matters to a
+    /// rock's path; at most [`MAX_SOLVER_TOLERANCE_MPS`]). 1e-4 takes half the sweeps on Tschamut and leaves the
+    /// run-outs as they were within the scatter of seeds (README, "Performance and convergence").
+    pub solver_tolerance_mps: f64,
     /// When restitution coefficients are drawn (default: per rock).
     pub cr_draw: CrDraw,
     /// Horizontal spacing of the path samples that feed rasters and collectors, m (default: 0.5; at least
@@ -84,6 +93,7 @@ impl Default for SimParams {
             penetration_slop_m: 0.002,
             impact_substeps: 8,
             solver_iterations: 100,
+            solver_tolerance_mps: 1e-6,
             cr_draw: CrDraw::PerRock,
             sample_spacing_m: 0.5,
             effects: Effects::default(),
@@ -153,6 +163,16 @@ impl SimParams {
                 format!("{prefix}solver_iterations"),
                 "must be at least 1",
                 "use for example 100",
+            ));
+        }
+        if !(self.solver_tolerance_mps > 0.0 && self.solver_tolerance_mps <= MAX_SOLVER_TOLERANCE_MPS) {
+            return Err(Error::invalid(
+                format!("{prefix}solver_tolerance_mps"),
+                format!(
+                    "must be above 0 and at most {MAX_SOLVER_TOLERANCE_MPS} m/s, got {}",
+                    crate::error::number_text(self.solver_tolerance_mps)
+                ),
+                "use 1e-6 (the default) or up to 1e-4 for about half the solver's sweeps",
             ));
         }
         Ok(())
@@ -329,6 +349,16 @@ mod tests {
             assert!(e.to_string().contains("simulation.impact_substeps"), "{e}");
         }
         assert!(SimParams { impact_substeps: 8, ..SimParams::default() }.validate("simulation.").is_ok());
+    }
+
+    #[test]
+    fn solver_tolerances_out_of_range_are_refused_by_name() {
+        for v in [0.0, -1e-6, 2.0 * MAX_SOLVER_TOLERANCE_MPS, f64::NAN] {
+            let e = SimParams { solver_tolerance_mps: v, ..SimParams::default() }.validate("simulation.").unwrap_err();
+            assert!(e.to_string().contains("simulation.solver_tolerance_mps"), "{e}");
+        }
+        let loosest = SimParams { solver_tolerance_mps: MAX_SOLVER_TOLERANCE_MPS, ..SimParams::default() };
+        assert!(loosest.validate("simulation.").is_ok());
     }
 
     #[test]

@@ -279,6 +279,7 @@ impl<'a> Run<'a> {
         let settings = SolverSettings {
             bounce_threshold_mps: params.bounce_threshold_mps,
             max_iterations: params.solver_iterations,
+            tolerance_mps: params.solver_tolerance_mps,
         };
         let out = Outcome {
             final_state: start,
