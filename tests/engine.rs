@@ -162,11 +162,19 @@ const SLIDE_MPS: f64 = 5.0;
 #[test]
 fn block_sliding_down_an_incline_stops_where_the_closed_form_says() {
     let (slope, phi_d) = (10.0f64, 30.0f64);
-    let (moved, spin) = slide(slope, 32.0, phi_d, &SimParams::default());
     let (th, mu) = (slope.to_radians(), phi_d.to_radians().tan());
     let want = SLIDE_MPS * SLIDE_MPS / (2.0 * GRAVITY_MPS2 * (mu * th.cos() - th.sin()));
-    assert_relative_eq!(moved, want, max_relative = 0.005);
-    assert!(spin < 0.2);
+    // Also with the solver stopping at its loosest tolerance.
+    for params in [SimParams::default(), loosest_solver()] {
+        let (moved, spin) = slide(slope, 32.0, phi_d, &params);
+        assert_relative_eq!(moved, want, max_relative = 0.005);
+        assert!(spin < 0.2);
+    }
+}
+
+/// The default engine with the solver's sweeps stopping at the largest tolerance allowed.
+fn loosest_solver() -> SimParams {
+    SimParams { solver_tolerance_mps: talus::sim::MAX_SOLVER_TOLERANCE_MPS, ..Default::default() }
 }
 
 #[test]
@@ -463,31 +471,16 @@ fn block_on_an_incline_below_its_static_friction_angle_stays_put() {
     let terrain = incline(25.0, material(0.0, 30.0, 20.0));
     let r = rock(ShapeKind::FlatBox, 1000.0);
     let start = resting_on_incline(&r, 25.0, 60.0, 0.0);
-    let out = simulate(&terrain, &r, start, &SimParams::default(), &mut stream(1, 0), &mut ());
-    assert_eq!(out.stop_reason, StopReason::Stopped);
-    assert!((out.final_state.position_m - start.position_m).norm() < 0.01);
+    for params in [SimParams::default(), loosest_solver()] {
+        let out = simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut ());
+        assert_eq!(out.stop_reason, StopReason::Stopped);
+        assert!((out.final_state.position_m - start.position_m).norm() < 0.01);
+    }
 }
 
 #[test]
-fn the_loosest_solver_tolerance_keeps_the_closed_forms_in_fewer_sweeps() {
-    let loose = SimParams { solver_tolerance_mps: talus::sim::MAX_SOLVER_TOLERANCE_MPS, ..Default::default() };
-    // The sliding block's stopping distance, as at the default tolerance.
-    let (slope, phi_d) = (10.0f64, 30.0f64);
-    let (moved, _) = slide(slope, 32.0, phi_d, &loose);
-    let (th, mu) = (slope.to_radians(), phi_d.to_radians().tan());
-    assert_relative_eq!(
-        moved,
-        SLIDE_MPS * SLIDE_MPS / (2.0 * GRAVITY_MPS2 * (mu * th.cos() - th.sin())),
-        max_relative = 0.005
-    );
-    // Held by static friction on a slope steeper than its dynamic angle.
-    let terrain = incline(25.0, material(0.0, 30.0, 20.0));
-    let r = rock(ShapeKind::FlatBox, 1000.0);
-    let start = resting_on_incline(&r, 25.0, 60.0, 0.0);
-    let out = simulate(&terrain, &r, start, &loose, &mut stream(1, 0), &mut ());
-    assert_eq!(out.stop_reason, StopReason::Stopped);
-    assert!((out.final_state.position_m - start.position_m).norm() < 0.01);
-    // A cube tumbling down a bumpy slope: the same kind of run in fewer sweeps a step.
+fn the_loosest_solver_tolerance_takes_fewer_sweeps() {
+    // A cube tumbling down a bumpy slope (the closed forms above hold at this tolerance too).
     let terrain = rough_slope(material(0.4, 35.0, 30.0));
     let r = rock(ShapeKind::Cube, 2650.0);
     let z = terrain.surface.height(20.0, 100.0).unwrap() + r.bounding_radius_m + 0.5;
@@ -497,7 +490,7 @@ fn the_loosest_solver_tolerance_keeps_the_closed_forms_in_fewer_sweeps() {
         assert!(out.contact_steps > 100, "{} contact steps", out.contact_steps);
         out.solver_sweeps as f64 / out.contact_steps as f64
     };
-    let (fine, coarse) = (sweeps(&SimParams::default()), sweeps(&loose));
+    let (fine, coarse) = (sweeps(&SimParams::default()), sweeps(&loosest_solver()));
     assert!(coarse < 0.8 * fine, "{coarse:.1} sweeps a step at the loosest tolerance, {fine:.1} at the default");
 }
 
