@@ -227,7 +227,10 @@ fn tiny_3d() -> CalibrationConfig {
 #[test]
 fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
     let spec = Synthetic3d { runs_per_group: 2, release_points: 2, masses_kg: vec![50.0, 400.0], ..Default::default() };
-    let model = synthetic_3d(&spec, short_runs()).unwrap();
+    // The solver converged to 1e-6 m/s (the default until 2026-11-30): there the zone arm's rocks creep on its soft
+    // ground often enough for the pointer to `max_time_s` below (on the default engine 15 of its 3,360 simulations
+    // do, under the pointer's share).
+    let model = synthetic_3d(&spec, SimParams { solver_tolerance_mps: 1e-6, ..short_runs() }).unwrap();
     assert_eq!(model.kind(), ModelKind::Rigid3d);
     let mut cfg = tiny_3d();
     let (cal, hold) = split::seeded_split(model.runs(), 0.25, cfg.seed);
@@ -1136,9 +1139,10 @@ fn a_slow_release_that_stalls_in_part_under_high_static_friction_is_reported_as_
 
 #[test]
 fn released_again_a_slow_release_runs_and_a_release_that_cannot_start_stays() {
-    // v083 under static friction 57° stalls in a quarter or more of its simulations (test above: 18 of 20 with the
-    // default 8 impact sub-steps, 14 of 20 without); with `release_attempts = 30` each stalled one is released again
-    // with fresh numbers and runs (at 0.9 a release, 10 attempts leave 3 of 20 stalled), and the ones that ran the
+    // v083 under static friction 57° stalls in a quarter or more of its simulations (test above: 17 of 20 on the
+    // default engine, 18 of 20 with the solver converged to 1e-6, 14 of 20 without impact sub-steps); with
+    // `release_attempts = 60` each stalled one is released again with fresh numbers and runs (at about 0.9 a
+    // release, 30 attempts leave 1 of 20 stalled on the default engine, none at 1e-6), and the ones that ran the
     // first time are unchanged. v086 (0.02 m/s on the 13° release bench) stalls on every release and stays
     // reported as not started.
     use talus::calibrate::model::evaluate;
@@ -1149,7 +1153,7 @@ fn released_again_a_slow_release_runs_and_a_release_that_cannot_start_stays() {
         ..Default::default()
     };
     let once = tschamut();
-    let again = tschamut_with(&CalibrationConfig { release_attempts: 30, ..Default::default() });
+    let again = tschamut_with(&CalibrationConfig { release_attempts: 60, ..Default::default() });
     let runs = once.runs();
     let which: Vec<usize> = ["v083", "v086"].iter().map(|id| runs.iter().position(|r| &r.id == id).unwrap()).collect();
     let plain = evaluate(once.as_ref(), &c, &which, 20, 1, 0).unwrap();
