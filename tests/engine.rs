@@ -83,10 +83,14 @@ fn cube_dropped_flat_rebounds_with_cr_times_impact_speed_and_no_spin() {
     let r = rock(ShapeKind::Cube, 2650.0); // 1 m cube
     let drop_m = 2.0;
     let start = at_rest(Vector3::new(20.3, 20.1, 0.5 + drop_m), UnitQuaternion::identity());
-    // Also with the impact step divided (`impact_substeps`): the closed form holds as it is resolved.
-    for impact_substeps in [1, 8] {
+    // Also with the impact step divided (`impact_substeps`): the closed form holds as it is resolved; and with the
+    // solver converged to 1e-6 m/s. What spin and sideways speed the rebound keeps is the solver's residual: within
+    // ten times its tolerance at a contact, 0.5 m from the centre (1e-3 rad/s by default, far below the rest test's
+    // 0.2 rad/s).
+    for (impact_substeps, tolerance_mps) in [(1, 1e-4), (8, 1e-4), (8, 1e-6)] {
         let mut rec = Record::default();
-        let params = SimParams { max_time_s: 1.5, impact_substeps, ..Default::default() };
+        let params =
+            SimParams { max_time_s: 1.5, impact_substeps, solver_tolerance_mps: tolerance_mps, ..Default::default() };
         simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut rec);
         let first = rec.impacts.first().expect("an impact");
         let v_in = (2.0 * GRAVITY_MPS2 * drop_m).sqrt();
@@ -97,8 +101,9 @@ fn cube_dropped_flat_rebounds_with_cr_times_impact_speed_and_no_spin() {
         let apex_clearance = rising.clearance_m + rising.velocity_mps.z.powi(2) / (2.0 * GRAVITY_MPS2);
         assert_relative_eq!(v_out, cr * v_in, max_relative = 0.01);
         assert_relative_eq!(apex_clearance, cr * cr * drop_m, max_relative = 0.02);
-        assert!(rising.spin_radps < 1e-6, "spin {}", rising.spin_radps);
-        assert!(rising.velocity_mps.x.abs() < 1e-5 && rising.velocity_mps.y.abs() < 1e-5);
+        assert!(rising.spin_radps < 10.0 * tolerance_mps / 0.5, "spin {}", rising.spin_radps);
+        let sideways = rising.velocity_mps.x.abs().max(rising.velocity_mps.y.abs());
+        assert!(sideways < 10.0 * tolerance_mps, "sideways {sideways} m/s");
     }
 }
 
