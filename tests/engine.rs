@@ -87,10 +87,10 @@ fn cube_dropped_flat_rebounds_with_cr_times_impact_speed_and_no_spin() {
     // solver converged to 1e-6 m/s. What spin and sideways speed the rebound keeps is the solver's residual: within
     // ten times its tolerance at a contact, 0.5 m from the centre (1e-3 rad/s by default, far below the rest test's
     // 0.2 rad/s).
-    for (impact_substeps, tolerance_mps) in [(1, 1e-4), (8, 1e-4), (8, 1e-6)] {
+    for (impact_substeps, solver) in [(1, SimParams::default()), (8, SimParams::default()), (8, fine_solver())] {
         let mut rec = Record::default();
-        let params =
-            SimParams { max_time_s: 1.5, impact_substeps, solver_tolerance_mps: tolerance_mps, ..Default::default() };
+        let params = SimParams { max_time_s: 1.5, impact_substeps, ..solver };
+        let tolerance_mps = params.solver_tolerance_mps;
         simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut rec);
         let first = rec.impacts.first().expect("an impact");
         let v_in = (2.0 * GRAVITY_MPS2 * drop_m).sqrt();
