@@ -217,10 +217,11 @@ fn endpoint_rows(sc: &Path, out: &Path) -> Vec<Vec<String>> {
 
 #[test]
 fn a_clipped_terrain_ends_where_the_clip_polygon_does() {
-    // Only the slope (x < 500030 m) is kept: rocks that reach the floor leave the terrain at the clip's edge. A rock
-    // is found off the terrain at the first step that ends past it, and a step in flight lasts up to
-    // `max_flight_step_s` (0.25 s), so one may end up to about 5 m past the edge (0.25 s at 20 m/s; on the default
-    // engine one does, by 2.2 m); the unclipped floor runs on 50 m.
+    // Only the slope (x < 500030 m) is kept: rocks that reach the floor leave the terrain at the clip's edge, and
+    // are recorded where they crossed it (a flight is cut at the crossing, a contact step moves a few cm). The clip
+    // keeps the triangles whose centre is inside, so on 2 m cells the edge zigzags between x = 500029 and 500031 m.
+    // Before flights were cut, a rock could end a flight step (up to 0.25 s) past it: one ended at 500032.2 m. The
+    // unclipped floor runs on 50 m.
     let dir = tempfile::tempdir().unwrap();
     let sc = clipped(
         dir.path(),
@@ -230,7 +231,7 @@ fn a_clipped_terrain_ends_where_the_clip_polygon_does() {
     assert_eq!(rows.len(), 24);
     for r in &rows {
         let x: f64 = r[7].parse().unwrap();
-        assert!(x < 500035.0, "rock ends at x = {x}, more than a flight step past the clip");
+        assert!(x < 500031.05, "rock ends at x = {x}, past the clip's edge: {r:?}");
         assert_eq!(r[10], "left_terrain", "{r:?}");
     }
 }

@@ -77,6 +77,28 @@ fn free_flight_follows_the_parabola_and_keeps_its_spin() {
 }
 
 #[test]
+fn a_rock_flying_off_the_terrain_ends_where_it_crossed_the_edge() {
+    // Thrown level at 20 m/s from x = 351 m, 300 m above a flat 400 m square: the centre crosses the edge x = 400 m
+    // at t = 2.45 s, on the parabola. A flight step lasts up to 0.25 s, so without cutting the flight at the crossing
+    // the rock would be found up to 5 m past it.
+    let terrain = Terrain::from_function(400.0, 4, material(0.3, 40.0, 30.0), |_, _| 0.0).unwrap();
+    let r = rock(ShapeKind::Cube, 500.0);
+    let (x0, v0) = (Vector3::new(351.0, 200.0, 300.0), Vector3::new(20.0, 0.0, 0.0));
+    let start = RigidState { velocity_mps: v0, ..at_rest(x0, UnitQuaternion::identity()) };
+    let out = simulate(&terrain, &r, start, &SimParams::default(), &mut stream(1, 0), &mut ());
+    assert_eq!(out.stop_reason, StopReason::LeftTerrain);
+    let t = 2.45;
+    let want = x0 + v0 * t + Vector3::new(0.0, 0.0, -0.5 * GRAVITY_MPS2 * t * t);
+    assert!(
+        (out.final_state.position_m - want).norm() < 1e-3,
+        "ends at {:?}, crossed at {want:?}",
+        out.final_state.position_m
+    );
+    assert!(out.final_state.position_m.x >= 400.0, "recorded before the edge: {:?}", out.final_state.position_m);
+    assert!((out.travel_time_s - t).abs() < 1e-4, "travel time {} s", out.travel_time_s);
+}
+
+#[test]
 fn cube_dropped_flat_rebounds_with_cr_times_impact_speed_and_no_spin() {
     let cr = 0.5;
     let terrain = Terrain::from_function(40.0, 8, material(cr, 40.0, 30.0), |_, _| 0.0).unwrap();

@@ -265,6 +265,20 @@ const GRAVITY: Vector3<f64> = Vector3::new(0.0, 0.0, -GRAVITY_MPS2);
 /// Extra clearance required of a ballistic step, m (ours).
 const FLIGHT_MARGIN_M: f64 = 0.05;
 
+/// The first time in (`on_s`, `off_s`] at which `off` holds, to 1 µs, by bisection, given that it does not hold at
+/// `on_s` and holds at `off_s` (ours: a flight piece is at most `sample_spacing_m` long, so it crosses an edge once).
+fn first_time_off(mut on_s: f64, mut off_s: f64, off: impl Fn(f64) -> bool) -> f64 {
+    while off_s - on_s > 1e-6 {
+        let mid = 0.5 * (on_s + off_s);
+        if off(mid) {
+            off_s = mid;
+        } else {
+            on_s = mid;
+        }
+    }
+    off_s
+}
+
 impl<'a> Run<'a> {
     fn new(
         terrain: &'a Terrain,
@@ -403,7 +417,8 @@ impl<'a> Run<'a> {
     }
 
     /// Exact ballistic motion over `h`, with free rotation, emitting samples along the parabola. Returns true if a
-    /// barrier caught the rock on the way.
+    /// barrier caught the rock on the way. A rock whose centre of mass passes off the terrain (its edge, a clip
+    /// polygon's or a hole's) stops its flight just past the crossing, so it is recorded where it left.
     fn fly(&mut self, h: f64, observer: &mut impl Observer) -> bool {
         // A flight ends any contact (a rock is clear of the ground only steps after its last touch, so with the
         // default contact duration nothing counts as touching here already).
@@ -413,9 +428,18 @@ impl<'a> Run<'a> {
         let horizontal = (v0.x * v0.x + v0.y * v0.y).sqrt() * h;
         let pieces =
             ((horizontal / self.params.sample_spacing_m).ceil() as usize).max((h / 0.1).ceil() as usize).max(1);
+        let at = |t: f64| x0 + v0 * t + GRAVITY * (0.5 * t * t);
+        let off = |t: f64| {
+            let x = at(t);
+            self.terrain.surface.at(x.x, x.y).is_none()
+        };
         let mut t_done = 0.0;
         for k in 1..=pieces {
-            let tk = h * k as f64 / pieces as f64;
+            let mut tk = h * k as f64 / pieces as f64;
+            let leaves = off(tk);
+            if leaves {
+                tk = first_time_off(t_done, tk, off);
+            }
             let dt = tk - t_done;
             t_done = tk;
             // Rotation in sub-steps of at most 10 ms (ours): accurate phase for spins up to tens of rad/s.
@@ -427,7 +451,7 @@ impl<'a> Run<'a> {
                 self.s.omega_body_radps = w1;
             }
             let from = self.s.position_m;
-            self.s.position_m = x0 + v0 * tk + GRAVITY * (0.5 * tk * tk);
+            self.s.position_m = at(tk);
             self.s.velocity_mps = v0 + GRAVITY * tk;
             self.t += dt;
             self.advance_slippage(false, dt);
@@ -441,6 +465,9 @@ impl<'a> Run<'a> {
                 BarrierEffect::None => {}
             }
             self.emit(observer, false, true);
+            if leaves {
+                break;
+            }
         }
         false
     }
