@@ -58,6 +58,9 @@ pub struct RunSummary {
     pub raster: RasterFacts,
     /// Rocks by stop reason.
     pub stop_reasons: BTreeMap<String, usize>,
+    /// Of the rocks that left the terrain, those that left over a gap inside it: the surface resumes within
+    /// [`GAP_PROBE_M`] ahead of where they left (nodata cells or missing triangles in their way).
+    pub left_over_gaps: usize,
     /// Run-out statistics over all rocks, m.
     pub runout_m: Stats,
     /// Travel time statistics, s.
@@ -82,9 +85,14 @@ pub struct RunSummary {
     pub collectors: Vec<crate::collector::facts::CollectorFacts>,
     /// The barriers: rocks caught and rocks that broke through.
     pub barriers: Vec<crate::collector::facts::BarrierFacts>,
-    /// What building the terrain noticed ([`Terrain::notes`]): keys it does not use, area closed over.
+    /// What building the terrain noticed ([`Terrain::notes`]): keys it does not use, area closed over; then what the
+    /// run noticed (rocks that left over gaps in the terrain).
     pub warnings: Vec<String>,
 }
+
+/// How far ahead of a rock that left the terrain the surface is looked for, m (ours: a gap narrower than this, in the
+/// rock's direction, is a hole in the terrain rather than its edge).
+pub const GAP_PROBE_M: f64 = 20.0;
 
 /// Terrain facts for the manifest.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -368,6 +376,7 @@ pub fn run_setup(
     let mut reasons: BTreeMap<String, usize> = StopReason::ALL.iter().map(|r| (r.as_str().to_string(), 0)).collect();
     let [mut runouts, mut times, mut energies, mut bounces] = [(); 4].map(|_| StatsAccumulator::default());
     let (mut guards, mut contact_steps, mut sweeps) = (0u64, 0u64, 0u64);
+    let mut gaps: (usize, Option<[f64; 3]>) = (0, None);
     let mut write_error = None;
     crate::parallel::map_in_order(
         n,
@@ -395,6 +404,13 @@ pub fn run_setup(
                 density.add([end.x, end.y]);
             }
             *reasons.entry(o.stop_reason.as_str().to_string()).or_insert(0) += 1;
+            let v = o.final_state.velocity_mps;
+            if o.stop_reason == StopReason::LeftTerrain
+                && terrain.surface.resumes_ahead(end.x, end.y, [v.x, v.y], GAP_PROBE_M)
+            {
+                gaps.0 += 1;
+                gaps.1.get_or_insert(terrain.to_file_frame(&end));
+            }
             runouts.add(rec.runout_m);
             times.add(o.travel_time_s);
             energies.add(o.max_kinetic_j / 1000.0);
@@ -525,7 +541,8 @@ pub fn run_setup(
             &collector_stats,
         ),
         barriers: crate::collector::facts::barrier_facts(&terrain.barriers, &collector_stats),
-        warnings: terrain.notes.clone(),
+        left_over_gaps: gaps.0,
+        warnings: terrain.notes.iter().cloned().chain(gaps.1.map(|at| gap_warning(gaps.0, at))).collect(),
     };
     crate::io::write_json_atomic(&out_dir.join("summary.json"), &summary)?;
     crate::report::write_run_index(&products, &summary)?;
@@ -534,6 +551,16 @@ pub fn run_setup(
 }
 
 /// The files an earlier run listed in `out_dir/summary.json` (none if there is no such run): plain file names only.
+/// The warning for `n` rocks that left the terrain over gaps in it, the first at `at` (file frame).
+fn gap_warning(n: usize, at: [f64; 3]) -> String {
+    format!(
+        "{n} rocks left the terrain over a gap inside it (the surface resumes within {GAP_PROBE_M} m ahead of where \
+         they left; the first at x = {:.1}, y = {:.1}): nodata cells or missing triangles end them there; fill the \
+         holes (gdal_fillnodata for a DEM, close the mesh) or clip the terrain to the ground you have",
+        at[0], at[1]
+    )
+}
+
 fn earlier_run_outputs(out_dir: &Path) -> Vec<String> {
     let Ok(text) = std::fs::read_to_string(out_dir.join("summary.json")) else { return Vec::new() };
     let Ok(json) = serde_json::from_str::<serde_json::Value>(&text) else { return Vec::new() };

@@ -237,6 +237,64 @@ fn a_clipped_terrain_ends_where_the_clip_polygon_does() {
 }
 
 #[test]
+fn rocks_leaving_over_a_gap_in_the_terrain_are_counted_and_warned_about() {
+    // A strip of nodata across the floor (the column of nodes at x = 45 m, so no triangle between x = 43 and 47 m):
+    // rocks reaching it leave the terrain with ground ahead of them, which the run counts and warns about; at the
+    // clip's edge, with nothing ahead, it does not.
+    let dir = tempfile::tempdir().unwrap();
+    let sc = scenario(dir.path(), "", 0.3, "300.0");
+    let dem = dir.path().join("slope.asc");
+    let text = std::fs::read_to_string(&dem).unwrap();
+    let gapped: Vec<String> = text
+        .lines()
+        .enumerate()
+        .map(|(k, l)| {
+            if k < 6 {
+                return l.to_string();
+            }
+            let mut v: Vec<&str> = l.split(' ').collect();
+            v[22] = "-9999";
+            v.join(" ")
+        })
+        .collect();
+    std::fs::write(&dem, gapped.join("\n") + "\n").unwrap();
+    let out = dir.path().join("out");
+    let o = talus().args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let gaps = summary["left_over_gaps"].as_u64().unwrap();
+    let left = summary["stop_reasons"]["left_terrain"].as_u64().unwrap();
+    // The rocks that left at the gap's near side (the others left the 40 m wide terrain sideways, on the slope).
+    let csv = std::fs::read_to_string(out.join("endpoints.csv")).unwrap();
+    let at_gap = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|r| r[10] == "left_terrain" && (r[7].parse::<f64>().unwrap() - 500043.0).abs() < 0.5)
+        .count() as u64;
+    assert!(
+        at_gap >= 3 && gaps == at_gap,
+        "{gaps} rocks counted over the gap, {at_gap} left there; {left} left in all"
+    );
+    assert_eq!(err.matches("rocks left the terrain over a gap inside it").count(), 1, "{err}");
+    assert!(summary["warnings"].to_string().contains("over a gap inside it"), "{}", summary["warnings"]);
+
+    let dir = tempfile::tempdir().unwrap();
+    let sc = clipped(
+        dir.path(),
+        "[[500000.0, 5000000.0], [500030.0, 5000000.0], [500030.0, 5000040.0], [500000.0, 5000040.0]]",
+    );
+    let out = dir.path().join("out");
+    let o = talus().args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("over a gap"));
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["left_over_gaps"], 0);
+}
+
+#[test]
 fn ground_levelled_beyond_a_polygon_continues_at_the_height_of_its_edge() {
     // Only the upper 20 m of the 35° slope are kept as they are; every node past x = 20 m takes the height of the
     // last node inside (x = 19 m: 100 + 21 tan 35° = 114.70 m), so the rocks stop on a level terrace there instead

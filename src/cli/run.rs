@@ -57,10 +57,15 @@ pub fn run(a: RunArgs) -> anyhow::Result<()> {
     for w in &setup.terrain.notes {
         pb.suspend(|| eprintln!("warning: {w}"));
     }
+    let n_notes = setup.terrain.notes.len();
     let summary = run_setup(&sc, setup, &overrides, &a.out, &progress, &RunExtras::default(), &mut |_, _| {})
         .map_err(|e| super::running(&a.scenario, e))?
         .summary;
     pb.finish_and_clear();
+    // What the run noticed, after the terrain's notes printed above.
+    for w in &summary.warnings[n_notes..] {
+        eprintln!("warning: {w}");
+    }
     let reason = |r: &str| summary.stop_reasons.get(r).copied().unwrap_or(0);
     say!(
         "{} rocks in {:.1} s ({:.0} rocks/s): {} stopped, {} left the terrain, {} hit the time limit{}",

@@ -344,6 +344,21 @@ impl Surface {
         })
     }
 
+    /// Whether the surface resumes within `max_m` of (x, y) along the horizontal direction `dir` (need not be unit
+    /// length), probed every 0.5 m: a rock that left the surface there crossed a gap in it (nodata cells, missing
+    /// triangles), not its outer edge. False for a zero direction.
+    pub fn resumes_ahead(&self, x: f64, y: f64, dir: [f64; 2], max_m: f64) -> bool {
+        let len = dir[0].hypot(dir[1]);
+        if len < 1e-12 {
+            return false;
+        }
+        let (ux, uy) = (dir[0] / len, dir[1] / len);
+        (1..=(max_m / 0.5) as usize).any(|k| {
+            let d = 0.5 * k as f64;
+            self.at(x + d * ux, y + d * uy).is_some()
+        })
+    }
+
     /// Height of the surface under (x, y), `None` over holes.
     #[inline]
     pub fn height(&self, x: f64, y: f64) -> Option<f64> {
