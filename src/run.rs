@@ -550,7 +550,6 @@ pub fn run_setup(
     Ok(RunOutput { summary, grids, terrain: setup.terrain.clone(), collectors, collector_stats })
 }
 
-/// The files an earlier run listed in `out_dir/summary.json` (none if there is no such run): plain file names only.
 /// The warning for `n` rocks that left the terrain over gaps in it, the first at `at` (file frame).
 fn gap_warning(n: usize, at: [f64; 3]) -> String {
     format!(
@@ -561,6 +560,7 @@ fn gap_warning(n: usize, at: [f64; 3]) -> String {
     )
 }
 
+/// The files an earlier run listed in `out_dir/summary.json` (none if there is no such run): plain file names only.
 fn earlier_run_outputs(out_dir: &Path) -> Vec<String> {
     let Ok(text) = std::fs::read_to_string(out_dir.join("summary.json")) else { return Vec::new() };
     let Ok(json) = serde_json::from_str::<serde_json::Value>(&text) else { return Vec::new() };
