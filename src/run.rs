@@ -58,8 +58,9 @@ pub struct RunSummary {
     pub raster: RasterFacts,
     /// Rocks by stop reason.
     pub stop_reasons: BTreeMap<String, usize>,
-    /// Of the rocks that left the terrain, those that left over a gap inside it: the surface resumes within
-    /// [`GAP_PROBE_M`] ahead of where they left (nodata cells or missing triangles in their way).
+    /// Of the rocks that left the terrain, those that left over a gap inside it: the surface resumes ahead of where
+    /// they left, within [`GAP_PROBE_M`] past the teeth of its edge (nodata cells or missing triangles in their way;
+    /// [`crate::terrain::Surface::resumes_ahead`]).
     pub left_over_gaps: usize,
     /// Run-out statistics over all rocks, m.
     pub runout_m: Stats,
@@ -90,8 +91,8 @@ pub struct RunSummary {
     pub warnings: Vec<String>,
 }
 
-/// How far ahead of a rock that left the terrain the surface is looked for, m (ours: a gap narrower than this, in the
-/// rock's direction, is a hole in the terrain rather than its edge).
+/// How far ahead of a rock that left the terrain the surface is looked for, past twice the size of the triangle it
+/// left, m (ours: a gap narrower than that, in the rock's direction, is a hole in the terrain rather than its edge).
 pub const GAP_PROBE_M: f64 = 20.0;
 
 /// Terrain facts for the manifest.
@@ -553,8 +554,8 @@ pub fn run_setup(
 /// The warning for `n` rocks that left the terrain over gaps in it, the first at `at` (file frame).
 fn gap_warning(n: usize, at: [f64; 3]) -> String {
     format!(
-        "{n} rocks left the terrain over a gap inside it (the surface resumes within {GAP_PROBE_M} m ahead of where \
-         they left; the first at x = {:.1}, y = {:.1}): nodata cells or missing triangles end them there; fill the \
+        "{n} rocks left the terrain over a gap inside it (the surface resumes ahead of where they left; the first \
+         at x = {:.1}, y = {:.1}): nodata cells or missing triangles end them there; fill the \
          holes (gdal_fillnodata for a DEM, close the mesh) or clip the terrain to the ground you have",
         at[0], at[1]
     )

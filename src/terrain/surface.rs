@@ -344,17 +344,25 @@ impl Surface {
         })
     }
 
-    /// Whether the surface resumes within `max_m` of (x, y) along the horizontal direction `dir` (need not be unit
-    /// length), probed every 0.5 m: a rock that left the surface there crossed a gap in it (nodata cells, missing
-    /// triangles), not its outer edge. False for a zero direction.
+    /// Whether the surface resumes ahead of (x, y), a point just off it, along the horizontal direction `dir` (need
+    /// not be unit length): probed every 0.5 m over `max_m`, starting twice the longest horizontal edge of the
+    /// triangle left behind (found within 1 m back) past the point, so that the teeth of an edge made of whole
+    /// triangles (a `clip`'s) do not count. True means the point lies in a gap of the surface (nodata cells, missing
+    /// triangles), not past its outer edge (ours). False for a zero direction.
     pub fn resumes_ahead(&self, x: f64, y: f64, dir: [f64; 2], max_m: f64) -> bool {
         let len = dir[0].hypot(dir[1]);
         if len < 1e-12 {
             return false;
         }
         let (ux, uy) = (dir[0] / len, dir[1] / len);
-        (1..=(max_m / 0.5) as usize).any(|k| {
-            let d = 0.5 * k as f64;
+        let left = (1..=20).find_map(|k| self.at(x - 0.05 * k as f64 * ux, y - 0.05 * k as f64 * uy));
+        let skip_m = left.map_or(0.0, |p| {
+            let c = self.corners(p.triangle);
+            let edge = |a: usize, b: usize| (c[a].x - c[b].x).hypot(c[a].y - c[b].y);
+            2.0 * edge(0, 1).max(edge(1, 2)).max(edge(2, 0))
+        });
+        (0..=(max_m / 0.5) as usize).any(|k| {
+            let d = skip_m + 0.5 * k as f64;
             self.at(x + d * ux, y + d * uy).is_some()
         })
     }
