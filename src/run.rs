@@ -244,7 +244,7 @@ pub fn load_terrain(sc: &Scenario) -> Result<Terrain> {
         let name = b.name.clone().unwrap_or_else(|| format!("barrier_{i}"));
         let line_m: Vec<[f64; 2]> =
             b.line.iter().map(|p| crate::terrain::horizontal_to_local(terrain.up, &terrain.origin, *p)).collect();
-        if !terrain.surface.any_point_over(&line_m) {
+        if !terrain.surface.any_point_over(&line_m, 1.0) {
             return Err(Error::invalid(
                 format!("{}: barriers[{i}] ({name})", sc.path.display()),
                 "no point of the line lies over the terrain",

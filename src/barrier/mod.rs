@@ -112,7 +112,7 @@ fn check_zone_on_terrain(zone: &ProtectedZone, terrain: &Terrain, field: &str) -
     if closed {
         ring.push(pts[0]);
     }
-    let on_edge = terrain.surface.any_point_over(&ring);
+    let on_edge = terrain.surface.any_point_over(&ring, 1.0);
     let encloses = closed && terrain.surface.vertices().iter().any(|v| point_in_polygon(v.x, v.y, pts));
     if on_edge || encloses {
         return Ok(());
@@ -200,6 +200,10 @@ pub fn propose_models(
         let extras = RunExtras { collectors: cand_cols.clone(), zone: zone.clone() };
         let dir = out_dir.join(run_folder(n, name, "without_barrier"));
         let without = run_scenario_with(msc, overrides, &dir, progress, &extras, &mut |_, r| tally.add(r, &cand_cols))?;
+        // What the run noticed beyond the terrain's notes printed above (the sources', rocks leaving over gaps).
+        for w in without.summary.warnings.iter().filter(|w| !terrain.notes.contains(w)) {
+            stage(&format!("warning{}: {w}", of_model(name)));
+        }
         runs.push(ModelStudy { name: name.clone(), without, with: None, residual: None });
         tallies.push(tally);
     }

@@ -267,7 +267,7 @@ pub fn scenario_collectors(specs: &[CollectorSpec], terrain: &Terrain) -> Result
                     "give every collector its own name (collectors.csv has one row per name)",
                 ));
             }
-            if !terrain.surface.any_point_over(&c.line_m) {
+            if !terrain.surface.any_point_over(&c.line_m, 1.0) {
                 return Err(Error::invalid(
                     field,
                     "no point of the line lies over the terrain",

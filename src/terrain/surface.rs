@@ -327,16 +327,16 @@ impl Surface {
         self.zmax[0].2[k].min(a as f64 * x + b as f64 * y + c as f64)
     }
 
-    /// True if some point of the polyline `line` (local frame; each segment sampled about every metre, at most
-    /// 10,000 points a segment) lies over the surface: a line given in another frame has none.
-    pub fn any_point_over(&self, line: &[[f64; 2]]) -> bool {
+    /// True if some point of the polyline `line` (local frame; each segment sampled at most `spacing_m` apart, at
+    /// most 10,000 points a segment) lies over the surface: a line given in another frame has none.
+    pub fn any_point_over(&self, line: &[[f64; 2]], spacing_m: f64) -> bool {
         let over = |p: [f64; 2]| self.at(p[0], p[1]).is_some();
         if let [p] = line {
             return over(*p);
         }
         line.windows(2).any(|w| {
             let (a, b) = (w[0], w[1]);
-            let n = ((b[0] - a[0]).hypot(b[1] - a[1]).ceil() as usize).clamp(1, 10_000);
+            let n = (((b[0] - a[0]).hypot(b[1] - a[1]) / spacing_m).ceil() as usize).clamp(1, 10_000);
             (0..=n).any(|k| {
                 let t = k as f64 / n as f64;
                 over([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])])
@@ -347,7 +347,7 @@ impl Surface {
     /// Whether the surface resumes ahead of (x, y), a point just off it, along the horizontal direction `dir` (need
     /// not be unit length): probed every 0.5 m over `max_m`, starting twice the longest horizontal edge of the
     /// triangle left behind (found within 1 m back) past the point, so that the teeth of an edge made of whole
-    /// triangles (a `clip`'s) do not count. True means the point lies in a gap of the surface (nodata cells, missing
+    /// triangles (the staircase edge of a DEM's nodata margin) do not count. True means the point lies in a gap of the surface (nodata cells, missing
     /// triangles), not past its outer edge (ours). False for a zero direction.
     pub fn resumes_ahead(&self, x: f64, y: f64, dir: [f64; 2], max_m: f64) -> bool {
         let len = dir[0].hypot(dir[1]);
@@ -361,10 +361,8 @@ impl Surface {
             let edge = |a: usize, b: usize| (c[a].x - c[b].x).hypot(c[a].y - c[b].y);
             2.0 * edge(0, 1).max(edge(1, 2)).max(edge(2, 0))
         });
-        (0..=(max_m / 0.5) as usize).any(|k| {
-            let d = skip_m + 0.5 * k as f64;
-            self.at(x + d * ux, y + d * uy).is_some()
-        })
+        let at = |d: f64| [x + d * ux, y + d * uy];
+        self.any_point_over(&[at(skip_m), at(skip_m + max_m)], 0.5)
     }
 
     /// Height of the surface under (x, y), `None` over holes.
