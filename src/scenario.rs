@@ -143,9 +143,10 @@ pub struct TerrainSpec {
     /// Polygons that override the material of the triangles whose centre lies inside them, applied in order.
     #[serde(default)]
     pub zones: Vec<ZoneSpec>,
-    /// Keep only the triangles whose centre lies inside this polygon (x, y in the files' horizontal frame): the
-    /// part of the files where the surface is known, for DEMs with padded or extrapolated margins. A rock that
-    /// crosses its edge leaves the terrain (default: keep everything).
+    /// Keep only the part of the terrain inside this polygon (x, y in the files' horizontal frame; the triangles its
+    /// edges cross are split along them, [`crate::terrain::split`]): the part of the files where the surface is
+    /// known, for DEMs with padded or extrapolated margins. A rock that crosses its edge leaves the terrain (default:
+    /// keep everything).
     #[serde(default)]
     pub clip: Option<Vec<[f64; 2]>>,
     /// Outside this polygon each vertex takes the height of the nearest vertex inside it (x, y in the files'

@@ -219,10 +219,11 @@ fn endpoint_rows(sc: &Path, out: &Path) -> (Vec<Vec<String>>, String) {
 #[test]
 fn a_clipped_terrain_ends_where_the_clip_polygon_does() {
     // Only the slope (x < 500030 m) is kept: rocks that reach the floor leave the terrain at the clip's edge, and
-    // are recorded where they crossed it (a flight is cut at the crossing, a contact step moves a few cm). The clip
-    // keeps the triangles whose centre is inside, so on 2 m cells the edge zigzags between x = 500029 and 500031 m.
-    // Before flights were cut, a rock could end a flight step (up to 0.25 s) past it: one ended at 500032.2 m. The
-    // unclipped floor runs on 50 m.
+    // are recorded where they crossed it (a flight is cut at the crossing, a contact step moves a few cm). The
+    // triangles the polygon's edge crosses are split along it: 22 rocks end at x = 500030.000–500030.024 m (measured),
+    // the other 2 leave the 40 m wide slope sideways. Before the split the clip kept the triangles whose centre was
+    // inside, so on these 2 m cells the edge zigzagged between x = 500029 and 500031 m; before flights were cut, a
+    // rock could end a flight step (up to 0.25 s) past it: one ended at 500032.2 m. The unclipped floor runs on 50 m.
     let dir = tempfile::tempdir().unwrap();
     let sc = clipped(
         dir.path(),
@@ -238,9 +239,11 @@ fn a_clipped_terrain_ends_where_the_clip_polygon_does() {
     assert_eq!(summary["left_over_gaps"], 0);
     for r in &rows {
         let x: f64 = r[7].parse().unwrap();
-        assert!(x < 500031.05, "rock ends at x = {x}, past the clip's edge: {r:?}");
+        assert!(x < 500030.05, "rock ends at x = {x}, past the clip's edge: {r:?}");
         assert_eq!(r[10], "left_terrain", "{r:?}");
     }
+    let at_edge = rows.iter().filter(|r| r[7].parse::<f64>().unwrap() > 500029.95).count();
+    assert!(at_edge >= 20, "{at_edge} of 24 rocks left at the clip's edge");
 }
 
 #[test]
@@ -287,6 +290,12 @@ fn rocks_leaving_over_a_gap_in_the_terrain_are_counted_and_warned_about() {
     );
     assert_eq!(err.matches("rocks left the terrain over a gap inside it").count(), 1, "{err}");
     assert!(summary["warnings"].to_string().contains("over a gap inside it"), "{}", summary["warnings"]);
+    // `talus barrier` runs the same rocks (its first run, without a barrier) and says so too.
+    let out = dir.path().join("barrier");
+    let o = talus().args(["barrier", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert_eq!(err.matches("rocks left the terrain over a gap inside it").count(), 1, "{err}");
 }
 
 #[test]

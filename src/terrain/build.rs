@@ -323,6 +323,7 @@ pub fn assemble_terrain(
     }
     if let Some(clip) = &spec.clip {
         let poly = to_local(clip);
+        (triangles, names) = super::split::split_at_polygon(&mut vertices, triangles, names, &poly);
         (triangles, names) = triangles
             .into_iter()
             .zip(names)

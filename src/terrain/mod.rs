@@ -9,6 +9,7 @@ pub mod build;
 pub mod dem_check;
 pub mod frame;
 pub mod material;
+pub mod split;
 pub mod surface;
 
 pub use bench::BenchGeometry;
