@@ -347,8 +347,8 @@ impl Surface {
     /// Whether the surface resumes ahead of (x, y), a point just off it, along the horizontal direction `dir` (need
     /// not be unit length): probed every 0.5 m over `max_m`, starting twice the longest horizontal edge of the
     /// triangle left behind (found within 1 m back) past the point, so that the teeth of an edge made of whole
-    /// triangles (the staircase edge of a DEM's nodata margin) do not count. True means the point lies in a gap of the surface (nodata cells, missing
-    /// triangles), not past its outer edge (ours). False for a zero direction.
+    /// triangles (the staircase edge of a DEM's nodata margin) do not count. True means the point lies in a gap of
+    /// the surface (nodata cells, missing triangles), not past its outer edge (ours). False for a zero direction.
     pub fn resumes_ahead(&self, x: f64, y: f64, dir: [f64; 2], max_m: f64) -> bool {
         let len = dir[0].hypot(dir[1]);
         if len < 1e-12 {
