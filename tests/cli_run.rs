@@ -269,19 +269,14 @@ fn rocks_leaving_over_a_gap_in_the_terrain_are_counted_and_warned_about() {
         .collect();
     std::fs::write(&dem, gapped.join("\n") + "\n").unwrap();
     let out = dir.path().join("out");
-    let o = talus().args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]).output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
+    let (rows, err) = endpoint_rows(&sc, &out);
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     let gaps = summary["left_over_gaps"].as_u64().unwrap();
     let left = summary["stop_reasons"]["left_terrain"].as_u64().unwrap();
     // The rocks that left at the gap's near side (the others left the 40 m wide terrain sideways, on the slope).
-    let csv = std::fs::read_to_string(out.join("endpoints.csv")).unwrap();
-    let at_gap = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect::<Vec<_>>())
+    let at_gap = rows
+        .iter()
         .filter(|r| r[10] == "left_terrain" && (r[7].parse::<f64>().unwrap() - 500043.0).abs() < 0.5)
         .count() as u64;
     assert!(
