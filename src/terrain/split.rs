@@ -52,17 +52,16 @@ pub fn split_at_polygon(
                 }
             }
         }
-        if near.is_empty() {
-            out.0.push(tri);
-            out.1.push(name);
-            continue;
+        // No piece at all (no allocation) for a triangle no edge is near, one for a triangle no edge crosses.
+        let mut pieces: Vec<Vec<Corner>> = Vec::new();
+        if !near.is_empty() {
+            pieces.push((0..3).map(|i| (corners[i], Some(tri[i]))).collect());
         }
-        let mut pieces: Vec<Vec<Corner>> = vec![(0..3).map(|i| (corners[i], Some(tri[i]))).collect()];
         for &i in &near {
             let (a, b) = edges[i];
             pieces = pieces.into_iter().flat_map(|p| cut(p, a, b)).collect();
         }
-        if pieces.len() == 1 {
+        if pieces.len() <= 1 {
             out.0.push(tri);
             out.1.push(name);
             continue;
