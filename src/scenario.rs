@@ -140,7 +140,8 @@ pub struct TerrainSpec {
     /// Renames: group, material or file name → material name (default: the same name).
     #[serde(default)]
     pub material_names: BTreeMap<String, String>,
-    /// Polygons that override the material of the triangles whose centre lies inside them, applied in order.
+    /// Polygons that override the material of the ground inside them, applied in order (the triangles their edges
+    /// cross are split along them, as for `clip`, so a zone ends exactly on its polygon).
     #[serde(default)]
     pub zones: Vec<ZoneSpec>,
     /// Keep only the part of the terrain inside this polygon (x, y in the files' horizontal frame; the triangles its

@@ -460,7 +460,7 @@ fn bad_input_is_answered_with_where_what_and_how() {
     fails_cleanly(d, &sc, &["sources[0].min_slope_deg", "only applies to scatter sources", "`polyline`"]);
     // A material zone off the terrain.
     let zone = "[[terrain.zones]]\nmaterial = \"default\"\npolygon = [[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]\n";
-    fails_cleanly(d, &scenario(d, zone, 0.3, "300.0"), &["terrain.zones[0].polygon", "no triangle"]);
+    fails_cleanly(d, &scenario(d, zone, 0.3, "300.0"), &["terrain.zones[0].polygon", "covers no part of the terrain"]);
     // A collector line off the terrain (coordinates in another frame), and two collectors of one name.
     let off = "[[collectors]]\nname = \"c\"\nline = [[0.0, 0.0], [10.0, 0.0]]\n";
     fails_cleanly(d, &scenario(d, off, 0.3, "300.0"), &["collectors[0] (c)", "no point of the line"]);

@@ -645,3 +645,36 @@ fn impact_substeps_change_nothing_without_an_impact() {
     let params = |n| SimParams { impact_substeps: n, ..SimParams::default() };
     assert_eq!(slide(30.0, 40.0, 35.0, &params(1)), slide(30.0, 40.0, 35.0, &params(8)));
 }
+
+#[test]
+fn a_zone_leaves_a_rock_that_keeps_clear_of_it_as_it_was_and_stops_one_that_crosses_it() {
+    // A bumpy 30° slope in 10 m cells; the zone (Cr 0, soft ground) is a pentagon whose edges cross its triangles.
+    // The calibration's zone arm reuses the simulations that keep clear of a candidate zone: they must be the ones
+    // the zoned terrain gives, bit for bit.
+    let z = |x: f64, y: f64| (200.0 - x) * 30f64.to_radians().tan() + 1.5 * (y / 9.0).sin() * (x / 13.0).cos();
+    let plain = Terrain::from_function(200.0, 20, material(0.6, 25.0, 20.0), z).unwrap();
+    let mut zoned = plain.clone();
+    zoned.materials.push(Material { name: "soft".into(), drag_per_s: 20.0, ..material(0.0, 35.0, 30.0) });
+    zoned.friction.push((35f64.to_radians().tan(), 30f64.to_radians().tan()));
+    let poly = [[33.0, 107.0], [187.0, 111.0], [183.0, 173.0], [71.0, 181.0], [28.0, 152.0]];
+    assert!(zoned.paint_zone(&poly, 1).unwrap() > 0);
+    assert!(zoned.surface.triangles().len() > plain.surface.triangles().len(), "the zone's edges split triangles");
+    let r = rock(ShapeKind::Cube, 500.0);
+    let end = |terrain: &Terrain, y: f64, k: u64| {
+        let start = at_rest(Vector3::new(10.0, y, z(10.0, y) + 5.0), UnitQuaternion::identity());
+        let out = simulate(terrain, &r, start, &SimParams::default(), &mut stream(7, k), &mut ());
+        (out.final_state.position_m, out.stop_reason)
+    };
+    // Down the slope along y = 20-56 m, 47 m and more from the zone.
+    for k in 0..10 {
+        let y = 20.0 + 4.0 * k as f64;
+        let (p, q) = (end(&plain, y, k), end(&zoned, y, k));
+        assert!(p.0.x > 180.0 && (p.0.y - y).abs() < 40.0, "the rock runs down the slope: {p:?}");
+        assert_eq!(p.0.map(f64::to_bits), q.0.map(f64::to_bits), "{p:?} against {q:?}");
+        assert_eq!(p.1, q.1);
+    }
+    // Down the slope along y = 140 m, through the zone: it stops in it.
+    let (p, q) = (end(&plain, 140.0, 0), end(&zoned, 140.0, 0));
+    assert!(p.0.x > 180.0 && q.0.x < 180.0 && q.1 == StopReason::Stopped, "{p:?} against {q:?}");
+    assert!(talus::terrain::point_in_polygon(q.0.x, q.0.y, &poly), "{q:?}");
+}

@@ -1266,11 +1266,11 @@ fn zone_arm(
     Ok(arm)
 }
 
-/// Whether a simulation's path comes near `region`: into its bounding box widened by two map cells plus 3 m (more
-/// than a zone triangle reaches beyond the region, plus a rock's reach and the path thinning).
+/// Whether a simulation's path comes near `region`: into its bounding box widened by two map cells plus 3 m (a
+/// rock's reach and the path thinning, with room to spare: the zone ends on the region's polygon; until 2026-11-30
+/// it took whole triangles, which reach about a cell beyond it).
 fn nears(ctx: &Context, region: &Region) -> impl Fn(&Sim) -> bool {
     let [x0, y0, x1, y1] = region.bbox();
-    // Zone triangles are those whose centre lies in the region: they reach about a cell beyond it.
     let margin = 2.0 * ctx.model.map_frame().cell_m + 3.0;
     move |s: &Sim| {
         s.path.iter().any(|p| {

@@ -18,7 +18,7 @@ use crate::rock::RockBody;
 use crate::scenario::{MaterialsBy, TerrainSpec, ZoneSpec};
 use crate::sim::{simulate, Impact, Observer, Sample, SimParams, StopReason};
 use crate::source::measured_release;
-use crate::terrain::{Material, Terrain, UpAxis};
+use crate::terrain::{horizontal_to_local, Material, Terrain, UpAxis};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -415,14 +415,19 @@ impl Model3d {
                             "this is a bug in the calibration: please report it",
                         ));
                     };
-                    if let Region::Polygon(polygon) = region {
-                        zones.push(ZoneSpec { material: e.label.clone(), polygon: polygon.clone() });
-                    }
+                    let Region::Polygon(polygon) = region else {
+                        return Err(Error::invalid(
+                            &e.label,
+                            "a 3DRB zone needs a polygon",
+                            "this is a bug in the calibration: please report it",
+                        ));
+                    };
+                    zones.push(ZoneSpec { material: e.label.clone(), polygon: polygon.clone() });
                     terrain.materials.push(Self::material(p, &e.label, &e.label, m)?);
-                    let idx = (terrain.materials.len() - 1) as u16;
-                    for t in triangles_in(&self.terrain, region) {
-                        terrain.triangle_material[t as usize] = idx;
-                    }
+                    // As a scenario's [[terrain.zones]]: the zone ends exactly on its polygon.
+                    let local: Vec<[f64; 2]> =
+                        polygon.iter().map(|q| horizontal_to_local(terrain.up, &terrain.origin, *q)).collect();
+                    terrain.paint_zone(&local, (terrain.materials.len() - 1) as u16)?;
                 }
                 EffectKind::CrspRotation => {
                     return Err(Error::invalid(&e.label, "the CRSP rule is a 2DLM option", "use it with --model 2dlm"));

@@ -1,6 +1,7 @@
 //! Building a [`Terrain`] from the scenario's files: read, put z up, shift to a local origin, merge, and give each
 //! triangle its material.
 
+use super::split::{centre_inside, split_at_polygon};
 use super::{horizontal_to_local, point_in_polygon, Material, Terrain, UpAxis};
 use crate::error::{Error, Result};
 use crate::io::MeshData;
@@ -323,15 +324,9 @@ pub fn assemble_terrain(
     }
     if let Some(clip) = &spec.clip {
         let poly = to_local(clip);
-        (triangles, names) = super::split::split_at_polygon(&mut vertices, triangles, names, &poly);
-        (triangles, names) = triangles
-            .into_iter()
-            .zip(names)
-            .filter(|(tri, _)| {
-                let c = centre(&vertices, tri);
-                point_in_polygon(c.x, c.y, &poly)
-            })
-            .unzip();
+        (triangles, names) = split_at_polygon(&mut vertices, triangles, names, &poly);
+        (triangles, names) =
+            triangles.into_iter().zip(names).filter(|(tri, _)| centre_inside(&vertices, tri, &poly)).unzip();
         if triangles.is_empty() {
             return Err(Error::invalid(
                 format!("{}: terrain.clip", scenario.display()),
@@ -390,26 +385,6 @@ pub fn assemble_terrain(
             ),
         ));
     }
-    for (z, zone) in spec.zones.iter().enumerate() {
-        let m = index_of(&zone.material).unwrap_or(0) as u16;
-        let poly = to_local(&zone.polygon);
-        let mut inside = 0;
-        for (t, tri) in triangles.iter().enumerate() {
-            let c = centre(&vertices, tri);
-            if point_in_polygon(c.x, c.y, &poly) {
-                tri_mat[t] = m;
-                inside += 1;
-            }
-        }
-        if inside == 0 {
-            return Err(Error::invalid(
-                format!("{}: terrain.zones[{z}].polygon", scenario.display()),
-                "no triangle of the terrain has its centre inside the polygon",
-                "give the polygon in the terrain's coordinates (the CRS of the DEM, or the mesh's x and y), around \
-                 at least one cell",
-            ));
-        }
-    }
     let mut terrain = Terrain::from_local(vertices, &triangles, &tri_mat, materials.to_vec()).map_err(|_| {
         Error::invalid(
             format!("{}: terrain.files", scenario.display()),
@@ -420,6 +395,18 @@ pub fn assemble_terrain(
     terrain.origin = origin;
     terrain.up = up;
     terrain.crs = crs;
+    // Each zone ends exactly on its polygon, as the clip does, and as the calibration's zones do.
+    for (z, zone) in spec.zones.iter().enumerate() {
+        let m = index_of(&zone.material).unwrap_or(0) as u16;
+        if terrain.paint_zone(&to_local(&zone.polygon), m)? == 0 {
+            return Err(Error::invalid(
+                format!("{}: terrain.zones[{z}].polygon", scenario.display()),
+                "the polygon covers no part of the terrain",
+                "give the polygon in the terrain's coordinates (the CRS of the DEM, or the mesh's x and y), over the \
+                 terrain",
+            ));
+        }
+    }
     terrain.notes = unused_keys(&terrain, spec, &names);
     terrain.notes.extend(up_axis_note(&terrain, up));
     Ok(terrain)
@@ -515,11 +502,6 @@ fn level_beyond(vertices: &mut [Vector3<f64>], poly: &[[f64; 2]]) -> bool {
         vertices[i].z = vertices[inside[nearest.item as usize]].z;
     }
     true
-}
-
-/// The centre of triangle `tri` of `vertices`.
-fn centre(vertices: &[Vector3<f64>], tri: &[u32; 3]) -> Vector3<f64> {
-    tri.iter().fold(Vector3::zeros(), |acc, &k| acc + vertices[k as usize]) / 3.0
 }
 
 #[cfg(test)]
@@ -624,6 +606,64 @@ mod tests {
         assert!(notes("y").is_empty(), "{:?}", notes("y"));
         let read_z = notes("z");
         assert!(read_z.len() == 1 && read_z[0].contains("set up = \"y\""), "{read_z:?}");
+    }
+
+    #[test]
+    fn a_zone_takes_exactly_the_ground_inside_its_polygon_and_painting_it_later_gives_the_same_terrain() {
+        // A design surface: a 100 m square plane of two triangles, and a zone across its diagonal. Taking whole
+        // triangles by their centre, the zone would have been one triangle (half the square) or none.
+        let z = |x: f64, y: f64| 0.3 * x + 0.1 * y;
+        let corners = [[0.0, 0.0], [100.0, 0.0], [100.0, 100.0], [0.0, 100.0]];
+        let mesh = MeshData {
+            vertices: corners.iter().map(|&[x, y]| [x, y, z(x, y)]).collect(),
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            group: vec![0; 2],
+            group_names: vec!["g".into()],
+            material: vec![0; 2],
+            material_names: vec![String::new()],
+        };
+        let meshes = [(PathBuf::from("t.obj"), mesh)];
+        let materials =
+            ["default", "soft"].map(|name| Material { name: name.into(), ..Material::preset("face_all").unwrap() });
+        let poly = [[20.0, 10.0], [70.0, 15.0], [60.0, 80.0], [30.0, 55.0]];
+        let poly_area = 0.5
+            * (0..4)
+                .map(|i| {
+                    let (a, b) = (poly[i], poly[(i + 1) % 4]);
+                    a[0] * b[1] - b[0] * a[1]
+                })
+                .sum::<f64>()
+                .abs();
+        let zone = format!("[[zones]]\nmaterial = \"soft\"\npolygon = {poly:?}\n");
+        let build = |zones: &str| {
+            let spec: TerrainSpec = toml::from_str(&format!("files = [\"t.obj\"]\n{zones}")).unwrap();
+            assemble_terrain(&meshes, Crs::default(), &spec, &materials, Path::new("s.toml")).unwrap()
+        };
+        let zoned = build(&zone);
+        let s = &zoned.surface;
+        let zone_area: f64 = (0..s.triangles().len() as u32)
+            .filter(|&t| zoned.triangle_material[t as usize] == 1)
+            .map(|t| s.footprint_area_m2(t))
+            .sum();
+        assert!((zone_area - poly_area).abs() < 1e-9 * poly_area, "{zone_area} against {poly_area}");
+        // Heights unchanged, and the material at a point is the zone's exactly inside the polygon.
+        let o = zoned.origin;
+        for i in 0..40 {
+            for j in 0..40 {
+                let (x, y) = (1.1 + 2.45 * i as f64, 0.7 + 2.47 * j as f64);
+                let p = s.at(x - o.x, y - o.y).unwrap();
+                assert!((p.z_m + o.z - z(x, y)).abs() < 1e-9);
+                let inside = point_in_polygon(x, y, &poly);
+                assert_eq!(zoned.triangle_material[p.triangle as usize] == 1, inside, "({x}, {y})");
+            }
+        }
+        // The calibration's zones: painting the polygon on the terrain built without it gives the same terrain.
+        let mut painted = build("");
+        let local: Vec<[f64; 2]> = poly.iter().map(|&p| horizontal_to_local(painted.up, &painted.origin, p)).collect();
+        assert!(painted.paint_zone(&local, 1).unwrap() > 0);
+        assert_eq!(painted.surface.triangles(), s.triangles());
+        assert_eq!(painted.surface.vertices(), s.vertices());
+        assert_eq!(painted.triangle_material, zoned.triangle_material);
     }
 
     #[test]

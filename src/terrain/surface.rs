@@ -78,6 +78,24 @@ impl Surface {
     /// original indices of the triangles kept (so callers can carry per-triangle data) and what was dropped.
     /// Returns `None` if no triangle is usable.
     pub fn new(vertices: Vec<Vector3<f64>>, triangles: &[[u32; 3]]) -> Option<(Surface, Vec<usize>, SurfaceStats)> {
+        Self::binned(vertices, triangles, None)
+    }
+
+    /// As [`Surface::new`], with the bins of `like`, a surface over the same ground (the same surface with some
+    /// triangles split): its queries, and so a rock's steps, stay those of `like` away from the split triangles.
+    pub fn new_like(
+        vertices: Vec<Vector3<f64>>,
+        triangles: &[[u32; 3]],
+        like: &Surface,
+    ) -> Option<(Surface, Vec<usize>, SurfaceStats)> {
+        Self::binned(vertices, triangles, Some(like.bin_m))
+    }
+
+    fn binned(
+        vertices: Vec<Vector3<f64>>,
+        triangles: &[[u32; 3]],
+        bin_m: Option<f64>,
+    ) -> Option<(Surface, Vec<usize>, SurfaceStats)> {
         let mut stats = SurfaceStats::default();
         let mut kept = Vec::with_capacity(triangles.len());
         let mut tris = Vec::with_capacity(triangles.len());
@@ -130,10 +148,15 @@ impl Surface {
         }
         // Bins of half the typical triangle leg (half a DEM cell): with exact overlap tests, one or two triangles
         // per bin.
-        let bin_m = (0.5 * area / (stats.triangles - stats.vertical) as f64).sqrt().max(1e-3);
-        let nx = (((hi.x - lo.x) / bin_m).floor() as usize + 1).min(1 << 15);
-        let ny = (((hi.y - lo.y) / bin_m).floor() as usize + 1).min(1 << 15);
-        let bin_m = bin_m.max((hi.x - lo.x) / nx as f64).max((hi.y - lo.y) / ny as f64) * (1.0 + 1e-9);
+        let (bin_m, nx, ny) = match bin_m {
+            Some(bin_m) => (bin_m, ((hi.x - lo.x) / bin_m) as usize + 1, ((hi.y - lo.y) / bin_m) as usize + 1),
+            None => {
+                let bin_m = (0.5 * area / (stats.triangles - stats.vertical) as f64).sqrt().max(1e-3);
+                let nx = (((hi.x - lo.x) / bin_m).floor() as usize + 1).min(1 << 15);
+                let ny = (((hi.y - lo.y) / bin_m).floor() as usize + 1).min(1 << 15);
+                (bin_m.max((hi.x - lo.x) / nx as f64).max((hi.y - lo.y) / ny as f64) * (1.0 + 1e-9), nx, ny)
+            }
+        };
         let normals = tris
             .iter()
             .zip(&planes)
