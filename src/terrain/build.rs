@@ -1,7 +1,7 @@
 //! Building a [`Terrain`] from the scenario's files: read, put z up, shift to a local origin, merge, and give each
 //! triangle its material.
 
-use super::split::{centre_inside, split_at_polygon};
+use super::split::{centre_inside, paint_polygon, split_at_polygon};
 use super::{horizontal_to_local, point_in_polygon, Material, Terrain, UpAxis};
 use crate::error::{Error, Result};
 use crate::io::MeshData;
@@ -385,6 +385,19 @@ pub fn assemble_terrain(
             ),
         ));
     }
+    // Each zone ends exactly on its polygon, as the clip does (and as the calibration's zones do,
+    // [`Terrain::paint_zone`]): the triangles its edges cross are split first.
+    for (z, zone) in spec.zones.iter().enumerate() {
+        let m = index_of(&zone.material).unwrap_or(0) as u16;
+        if paint_polygon(&mut vertices, &mut triangles, &mut tri_mat, &to_local(&zone.polygon), m) == 0 {
+            return Err(Error::invalid(
+                format!("{}: terrain.zones[{z}].polygon", scenario.display()),
+                "the polygon covers no part of the terrain",
+                "give the polygon in the terrain's coordinates (the CRS of the DEM, or the mesh's x and y), over the \
+                 terrain",
+            ));
+        }
+    }
     let mut terrain = Terrain::from_local(vertices, &triangles, &tri_mat, materials.to_vec()).map_err(|_| {
         Error::invalid(
             format!("{}: terrain.files", scenario.display()),
@@ -395,18 +408,6 @@ pub fn assemble_terrain(
     terrain.origin = origin;
     terrain.up = up;
     terrain.crs = crs;
-    // Each zone ends exactly on its polygon, as the clip does, and as the calibration's zones do.
-    for (z, zone) in spec.zones.iter().enumerate() {
-        let m = index_of(&zone.material).unwrap_or(0) as u16;
-        if terrain.paint_zone(&to_local(&zone.polygon), m)? == 0 {
-            return Err(Error::invalid(
-                format!("{}: terrain.zones[{z}].polygon", scenario.display()),
-                "the polygon covers no part of the terrain",
-                "give the polygon in the terrain's coordinates (the CRS of the DEM, or the mesh's x and y), over the \
-                 terrain",
-            ));
-        }
-    }
     terrain.notes = unused_keys(&terrain, spec, &names);
     terrain.notes.extend(up_axis_note(&terrain, up));
     Ok(terrain)

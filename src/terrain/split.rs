@@ -93,21 +93,35 @@ pub fn centre_inside(vertices: &[Vector3<f64>], tri: &[u32; 3], poly: &[[f64; 2]
     point_in_polygon(c.x, c.y, poly)
 }
 
+/// Splits `triangles` at `poly` ([`split_at_polygon`]) and gives `tag` to the pieces inside it. Returns how many
+/// triangles took it.
+pub fn paint_polygon<T: Clone>(
+    vertices: &mut Vec<Vector3<f64>>,
+    triangles: &mut Vec<[u32; 3]>,
+    tags: &mut Vec<T>,
+    poly: &[[f64; 2]],
+    tag: T,
+) -> usize {
+    (*triangles, *tags) = split_at_polygon(vertices, std::mem::take(triangles), std::mem::take(tags), poly);
+    let mut taken = 0;
+    for (tri, t) in triangles.iter().zip(tags.iter_mut()) {
+        if centre_inside(vertices, tri, poly) {
+            *t = tag.clone();
+            taken += 1;
+        }
+    }
+    taken
+}
+
 impl Terrain {
     /// Gives material `material` to the ground under `poly` (horizontal, local frame), the triangles its edges cross
     /// split first, so that the zone ends exactly on the polygon as a scenario's `[[terrain.zones]]` entry does (the
     /// calibration's zones). Returns the number of triangles the zone took (0 if the polygon misses the terrain).
     pub fn paint_zone(&mut self, poly: &[[f64; 2]], material: u16) -> crate::Result<usize> {
         let mut vertices = self.surface.vertices().to_vec();
-        let triangles = self.surface.triangles().to_vec();
-        let (triangles, mut tags) = split_at_polygon(&mut vertices, triangles, self.triangle_material.clone(), poly);
-        let mut taken = 0;
-        for (tri, tag) in triangles.iter().zip(&mut tags) {
-            if centre_inside(&vertices, tri, poly) {
-                *tag = material;
-                taken += 1;
-            }
-        }
+        let mut triangles = self.surface.triangles().to_vec();
+        let mut tags = self.triangle_material.clone();
+        let taken = paint_polygon(&mut vertices, &mut triangles, &mut tags, poly, material);
         let (surface, kept, stats) = Surface::new_like(vertices, &triangles, &self.surface).ok_or_else(|| {
             crate::Error::invalid("terrain zone", "no usable triangle after the split", "check the zone's polygon")
         })?;
