@@ -1267,8 +1267,8 @@ fn zone_arm(
 }
 
 /// Whether a simulation's path comes near `region`: into its bounding box widened by two map cells plus 3 m (a
-/// rock's reach and the path thinning, with room to spare: the zone ends on the region's polygon; until 2026-11-30
-/// it took whole triangles, which reach about a cell beyond it).
+/// rock's reach, the path's thinning and the flights between its points, whose impacts the path may miss; until
+/// 2026-11-30 zones took whole triangles, which also reach about a cell beyond the region).
 fn nears(ctx: &Context, region: &Region) -> impl Fn(&Sim) -> bool {
     let [x0, y0, x1, y1] = region.bbox();
     let margin = 2.0 * ctx.model.map_frame().cell_m + 3.0;
@@ -1322,6 +1322,46 @@ mod tests {
     use super::*;
     use crate::calibrate::model2d::Model2d;
     use crate::calibrate::synthetic::{case_2d, synthetic_2d, truth_2d, Synthetic2d};
+
+    /// The zone arm takes from the baseline the simulations that keep clear of a region: on the default 3DRB model
+    /// they are the ones the zone's own setting would run, bit for bit (the zone is split into the terrain on the
+    /// terrain's own bins, so the steps of a rock that never meets it do not change).
+    #[test]
+    fn a_zone_setting_takes_from_the_baseline_exactly_the_simulations_it_would_run() {
+        use crate::calibrate::synthetic::{case_3d, synthetic_3d, truth_3d, Synthetic3d};
+        let spec = Synthetic3d { runs_per_group: 2, ..case_3d("zone", 1).unwrap() };
+        let model = synthetic_3d(&spec, crate::sim::SimParams::default()).unwrap();
+        let zoned = truth_3d(&spec);
+        let mut plain = zoned.clone();
+        plain.effects.clear();
+        let cfg = CalibrationConfig { threads: 2, ..Default::default() };
+        let ctx = Context::new(&model, &cfg, &|_: &str| {});
+        let cal: Vec<usize> = (0..model.runs().len()).collect();
+        let region = zoned.effects[0].region.clone().unwrap();
+        let reference = ctx.sims(&plain, &cal, 3).unwrap();
+        let near = nears(&ctx, &region);
+        let all = reference.iter().flat_map(|r| &r.sims);
+        let (n_near, n) = (all.clone().filter(|s| near(s)).count(), all.count());
+        assert!(n_near > 0 && n_near < n, "{n_near} of {n} simulations come near the zone");
+        let reused = sims_reusing(&ctx, &zoned, &cal, &reference, &region, 0..3).unwrap();
+        let fresh = ctx.sims(&zoned, &cal, 3).unwrap();
+        // Where they end and how they got there (a reused path summary has no share on the zone's material).
+        let ends = |rs: &[RunSims]| -> Vec<(u64, [u64; 3], bool, Vec<[f32; 2]>)> {
+            (rs.iter().flat_map(|r| &r.sims))
+                .map(|s| (s.runout_m.to_bits(), s.rest_m.map(f64::to_bits), s.stopped, s.path.clone()))
+                .collect()
+        };
+        let (a, b) = (ends(&reused), ends(&fresh));
+        let differ: Vec<usize> = (0..a.len()).filter(|&i| a[i] != b[i]).collect();
+        assert!(
+            differ.is_empty(),
+            "{} of {} differ, the first: {:?} against {:?}",
+            differ.len(),
+            a.len(),
+            differ.first().map(|&i| (a[i].0, a[i].1)),
+            differ.first().map(|&i| (b[i].0, b[i].1))
+        );
+    }
 
     /// The 2DLM `control_a` campaign (data seed 1) several tests run on: its spec, its model, all its runs as
     /// calibration runs, and their three folds.
