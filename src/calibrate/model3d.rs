@@ -359,7 +359,8 @@ impl Model for Model3d {
     }
 }
 
-/// The triangles of `terrain` a zone over `region` takes: those whose centre lies in it.
+/// The triangles of `terrain` whose centre lies in `region`: near enough the ground a zone there takes (it splits the
+/// triangles its edges cross, [`Terrain::paint_zone`]) to say which material it covers most.
 fn triangles_in<'a>(terrain: &'a Terrain, region: &'a Region) -> impl Iterator<Item = u32> + 'a {
     (0..terrain.triangle_material.len() as u32).filter(move |&t| {
         let [a, b, c] = terrain.surface.corners(t);
