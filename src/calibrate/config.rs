@@ -924,6 +924,12 @@ fn check_setting(field: &str, s: &ParamSetting) -> Result<()> {
 mod tests {
     use super::*;
 
+    #[test]
+    fn an_empty_settings_file_gives_the_defaults() {
+        let read = CalibrationConfig::from_toml_str("", "empty.toml").unwrap();
+        assert_eq!(format!("{read:?}"), format!("{:?}", CalibrationConfig::default()));
+    }
+
     /// Errors name the line of the key at fault, and a parameter table's keys are checked (a typo in `start` was
     /// read as a table without a start).
     #[test]
