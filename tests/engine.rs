@@ -654,8 +654,9 @@ fn a_zone_leaves_a_rock_that_keeps_clear_of_it_as_it_was_and_stops_one_that_cros
     let z = |x: f64, y: f64| (200.0 - x) * 30f64.to_radians().tan() + 1.5 * (y / 9.0).sin() * (x / 13.0).cos();
     let plain = Terrain::from_function(200.0, 20, material(0.6, 25.0, 20.0), z).unwrap();
     let mut zoned = plain.clone();
-    zoned.materials.push(Material { name: "soft".into(), drag_per_s: 20.0, ..material(0.0, 35.0, 30.0) });
-    zoned.friction.push((35f64.to_radians().tan(), 30f64.to_radians().tan()));
+    let soft = Material { name: "soft".into(), drag_per_s: 20.0, ..material(0.0, 35.0, 30.0) };
+    zoned.friction.push((soft.mu_static(), soft.mu_dynamic()));
+    zoned.materials.push(soft);
     let poly = [[33.0, 107.0], [187.0, 111.0], [183.0, 173.0], [71.0, 181.0], [28.0, 152.0]];
     assert!(zoned.paint_zone(&poly, 1).unwrap() > 0);
     assert!(zoned.surface.triangles().len() > plain.surface.triangles().len(), "the zone's edges split triangles");

@@ -88,13 +88,13 @@ impl Surface {
         triangles: &[[u32; 3]],
         like: &Surface,
     ) -> Option<(Surface, Vec<usize>, SurfaceStats)> {
-        Self::binned(vertices, triangles, Some(like.bin_m))
+        Self::binned(vertices, triangles, Some(like))
     }
 
     fn binned(
         vertices: Vec<Vector3<f64>>,
         triangles: &[[u32; 3]],
-        bin_m: Option<f64>,
+        like: Option<&Surface>,
     ) -> Option<(Surface, Vec<usize>, SurfaceStats)> {
         let mut stats = SurfaceStats::default();
         let mut kept = Vec::with_capacity(triangles.len());
@@ -148,8 +148,8 @@ impl Surface {
         }
         // Bins of half the typical triangle leg (half a DEM cell): with exact overlap tests, one or two triangles
         // per bin.
-        let (bin_m, nx, ny) = match bin_m {
-            Some(bin_m) => (bin_m, ((hi.x - lo.x) / bin_m) as usize + 1, ((hi.y - lo.y) / bin_m) as usize + 1),
+        let (bin_m, nx, ny) = match like {
+            Some(like) => (like.bin_m, like.nx, like.ny),
             None => {
                 let bin_m = (0.5 * area / (stats.triangles - stats.vertical) as f64).sqrt().max(1e-3);
                 let nx = (((hi.x - lo.x) / bin_m).floor() as usize + 1).min(1 << 15);
