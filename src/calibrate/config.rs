@@ -29,6 +29,7 @@
 //!               "rolling_resistance", "soft_drag", "vegetation_drag", "zone"]   # default; "slip_friction" if listed
 //! min_improvement = 0.05    # relative cut of the cross-validated mean CRPS to keep an effect
 //! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
+//! fold_test = true          # and the exact sign-flip test over the inner folds (5 folds: every fold better)
 //! # screen_repeats = 20     # simulations per run in the loop's grid screening (default: repeats)
 //! race_repeats = 4          # a first look at every grid setting; the folds' best go on to screen_repeats (0: off)
 //! one_se_rule = true        # of the effects that pass, the simplest within one standard error of the best
@@ -309,6 +310,13 @@ pub struct EffectsConfig {
     /// roughness with a dynamic friction of 5°, in 44 % more simulations (docs/calibration.md, "A fold's refit kept
     /// only if it beats its start on fresh repeats").
     pub refit_check: bool,
+    /// An effect must also pass the exact one-sided sign-flip test over the inner folds' summed cuts at `alpha`
+    /// (default true; ours). With 5 folds or fewer only the pattern of every fold better reaches 0.05, so there it
+    /// asks that every fold be better. A fold's runs are predicted with the parameters refitted on its training runs,
+    /// so their cuts share that refit's luck, and the per-run test, which takes the runs as independent, can pass a
+    /// cut that one or two folds make (docs/calibration.md, "Every fold must agree"). False: the per-run test alone,
+    /// as until 2026-11-30.
+    pub fold_test: bool,
     /// Each arm of an effect with a parameter also fits the model with the effect again, as the population fit
     /// fitted the baseline (its start points and screening), on each inner fold's training runs and on all
     /// calibration runs, and offers those fits to the screening beside the re-centred grid; the baseline's arm gets
@@ -337,6 +345,7 @@ impl Default for EffectsConfig {
             one_se_rule: true,
             restart_arms: false,
             refit_check: false,
+            fold_test: true,
             fit_arms: None,
         }
     }

@@ -34,8 +34,10 @@
 //! fold's training runs (`cv_refit_evaluations` evaluations), and predict the fold's runs. The decision uses the
 //! refitted errors.
 //!
-//! **"Clearly improves"** (ours): the out-of-fold mean CRPS falls by at least `min_improvement` (5 %) and a
-//! one-sided paired sign-flip permutation test on the per-run CRPS differences gives p ≤ `alpha` (0.05). Among
+//! **"Clearly improves"** (ours): the out-of-fold mean CRPS falls by at least `min_improvement` (5 %), a
+//! one-sided paired sign-flip permutation test on the per-run CRPS differences gives p ≤ `alpha` (0.05), and the
+//! exact sign-flip test on the inner folds' summed differences does too (`fold_test`; with 5 folds: every fold
+//! better), since a fold's runs share that fold's refitted parameters and are not independent of each other. Among
 //! the effects that pass, the one with the fewest added parameters whose out-of-fold CRPS is within one standard
 //! error of the best one's is kept (the one-standard-error rule, `choose`; `one_se_rule = false`: the largest
 //! cut), then refitted with the optimiser (together with the base parameters), and the loop starts again.
@@ -56,7 +58,7 @@ use super::params::{
 };
 use super::runs::FieldRun;
 use super::split::folds;
-use super::stats::{mean, paired_sign_flip_p, sample_sd};
+use super::stats::{exact_sign_flip_p, mean, paired_sign_flip_p, sample_sd};
 use super::zone::zone_check;
 use crate::random::stream;
 use serde::{Deserialize, Serialize};
@@ -90,6 +92,14 @@ pub struct EffectTrial {
     pub relative_improvement: f64,
     /// One-sided paired permutation p-value.
     pub p_value: f64,
+    /// Per inner fold, the mean cut of the CRPS over the fold's runs (before − after, m; positive where the effect
+    /// predicts better). A fold's runs share its refitted parameters, so a cut carried by one fold's refit shows here.
+    #[serde(default)]
+    pub fold_cuts_m: Vec<f64>,
+    /// The exact one-sided sign-flip p-value over the folds' summed cuts (at least 2^−folds; recorded, not used to
+    /// decide).
+    #[serde(default)]
+    pub fold_p_value: f64,
     /// Kept.
     pub kept: bool,
     /// The effect's parameters at the best setting on all calibration runs (before the refit).
@@ -346,6 +356,15 @@ pub fn effects_loop(
             let diffs: Vec<f64> = before.iter().zip(&after).map(|(a, b)| a.crps_m - b.crps_m).collect();
             let mut rng = stream(cfg.seed, u64::MAX - 4000 - round as u64);
             let p = paired_sign_flip_p(&diffs, cfg.effects.permutations, &mut rng);
+            let fold_sums: Vec<f64> = (0..fold_of.iter().max().map_or(0, |k| k + 1))
+                .map(|f| diffs.iter().zip(&fold_of).filter(|(_, &k)| k == f).map(|(d, _)| d).sum())
+                .collect();
+            let fold_cuts_m: Vec<f64> = fold_sums
+                .iter()
+                .enumerate()
+                .map(|(f, sum)| sum / fold_of.iter().filter(|&&k| k == f).count().max(1) as f64)
+                .collect();
+            let fold_p = exact_sign_flip_p(&fold_sums);
             let improvement = if mb > 0.0 { 1.0 - ma / mb } else { 0.0 };
             let effect_params: BTreeMap<String, f64> = full
                 .params
@@ -368,19 +387,27 @@ pub fn effects_loop(
                 cv_runout_mae_after_m: mae(&after),
                 relative_improvement: improvement,
                 p_value: p,
+                fold_cuts_m,
+                fold_p_value: fold_p,
                 kept: false,
                 parameters: effect_params,
                 region,
             };
             (ctx.log)(&format!(
-                "  {}: CV CRPS {mb:.2} -> {ma:.2} m ({:+.1} %), p = {p:.3}; CV run-out MAE {:.2} -> {:.2} m (grid screening CRPS {grid_before:.2} -> {grid_after:.2} m)",
+                "  {}: CV CRPS {mb:.2} -> {ma:.2} m ({:+.1} %), p = {p:.3}; CV run-out MAE {:.2} -> {:.2} m (grid screening CRPS {grid_before:.2} -> {grid_after:.2} m); better in {} of {} folds (cuts {} m, fold p = {fold_p:.3})",
                 prop.label,
                 -100.0 * improvement,
                 mae(&before),
-                mae(&after)
+                mae(&after),
+                trial.fold_cuts_m.iter().filter(|&&c| c > 0.0).count(),
+                trial.fold_cuts_m.len(),
+                trial.fold_cuts_m.iter().map(|c| format!("{c:+.2}")).collect::<Vec<_>>().join(" ")
             ));
+            // With k folds no pattern but the observed one reaches p = 2^-k: there, every fold better.
+            let fold_alpha = cfg.effects.alpha.max(0.5f64.powi(fold_sums.len() as i32));
             let passes = improvement >= cfg.effects.min_improvement
                 && p <= cfg.effects.alpha
+                && (!cfg.effects.fold_test || fold_p <= fold_alpha)
                 && full.effect(&prop.label).is_some();
             out.trials.push(trial.clone());
             if passes {
@@ -469,8 +496,15 @@ pub fn effects_loop(
             "cv_runout_mae_after_m": trial.cv_runout_mae_after_m,
             "relative_improvement": trial.relative_improvement,
             "p_value": trial.p_value,
+            "fold_cuts_m": trial.fold_cuts_m,
+            "fold_p_value": trial.fold_p_value,
             "inner_folds": cfg.inner_folds,
-            "criterion": format!("relative improvement >= {} and one-sided paired permutation p <= {}", cfg.effects.min_improvement, cfg.effects.alpha),
+            "criterion": format!(
+                "relative improvement >= {} and one-sided paired permutation p <= {}{}",
+                cfg.effects.min_improvement,
+                cfg.effects.alpha,
+                if cfg.effects.fold_test { " over the runs and over the inner folds" } else { "" }
+            ),
             "added_parameters": added_parameters,
             "selection": if cfg.effects.one_se_rule { SELECTION_ONE_SE } else { SELECTION_BEST },
             "rivals": rivals,

@@ -853,8 +853,8 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             s,
             "\nOut-of-fold scores inside the calibration runs (CRPS decides; run-out MAE shown beside it).\n"
         );
-        let _ = writeln!(s, "| round | effect | proposed by | CV CRPS before (m) | after (m) | cut | p | CV MAE before → after (m) | kept |");
-        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+        let _ = writeln!(s, "| round | effect | proposed by | CV CRPS before (m) | after (m) | cut | p | folds better (fold p) | CV MAE before → after (m) | kept |");
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
         for t in &r.effects_tried {
             let by: Vec<String> = t
                 .proposed_by
@@ -863,7 +863,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
                 .collect();
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {:.2} | {:.2} | {:+.1} % | {:.3} | {:.2} → {:.2} | {} |",
+                "| {} | {} | {} | {:.2} | {:.2} | {:+.1} % | {:.3} | {} of {} ({:.3}) | {:.2} → {:.2} | {} |",
                 t.round,
                 t.label,
                 by.join("; "),
@@ -871,6 +871,9 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
                 t.cv_crps_after_m,
                 -100.0 * t.relative_improvement,
                 t.p_value,
+                t.fold_cuts_m.iter().filter(|&&c| c > 0.0).count(),
+                t.fold_cuts_m.len(),
+                t.fold_p_value,
                 t.cv_runout_mae_before_m,
                 t.cv_runout_mae_after_m,
                 if t.kept { "yes" } else { "no" }

@@ -159,6 +159,23 @@ pub fn paired_sign_flip_p(d: &[f64], permutations: usize, rng: &mut Rng) -> f64 
     (1 + hits) as f64 / (1 + permutations) as f64
 }
 
+/// Exact one-sided sign-flip test of H1: sum(d) > 0 over a few independent units (e.g. the inner folds of a
+/// cross-validation, whose runs share the fold's refitted parameters and so are not independent of each other):
+/// the share of all 2^k sign patterns whose sum reaches the observed one, counting the observed itself (so never
+/// below 2^-k). 1 when `d` is empty; `d` holds at most 20 units.
+pub fn exact_sign_flip_p(d: &[f64]) -> f64 {
+    assert!(d.len() <= 20, "an exact sign-flip test enumerates 2^k patterns; k = {} is too many", d.len());
+    let observed: f64 = d.iter().sum();
+    let patterns = 1usize << d.len();
+    let hits = (0..patterns)
+        .filter(|bits| {
+            let s: f64 = d.iter().enumerate().map(|(i, x)| if bits >> i & 1 == 1 { -x } else { *x }).sum();
+            s >= observed - 1e-12
+        })
+        .count();
+    hits as f64 / patterns as f64
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -199,5 +216,16 @@ mod tests {
         let centred: Vec<f64> = (0..30).map(|_| uniform(&mut rng) - 0.5).collect();
         let centred: Vec<f64> = centred.iter().map(|v| v - mean(&centred)).collect();
         assert!(paired_sign_flip_p(&centred, 499, &mut rng) > 0.2);
+    }
+
+    #[test]
+    fn the_exact_sign_flip_test_counts_the_patterns_that_reach_the_observed_sum() {
+        // Five units all better: only the observed pattern reaches its sum.
+        assert_eq!(exact_sign_flip_p(&[1.0, 2.0, 0.5, 1.0, 3.0]), 1.0 / 32.0);
+        // One worse unit: the patterns reaching 1 + 1 + 1 − 0.5 = 2.5 are it and the one that flips the −0.5 only.
+        assert_eq!(exact_sign_flip_p(&[1.0, 1.0, 1.0, -0.5]), 2.0 / 16.0);
+        // All worse: every pattern reaches the lowest sum.
+        assert_eq!(exact_sign_flip_p(&[-1.0, -1.0]), 1.0);
+        assert_eq!(exact_sign_flip_p(&[]), 1.0);
     }
 }
