@@ -488,6 +488,8 @@ impl Default for CalibrationConfig {
 
 /// Most population-fit searches per start point: search k uses the streams of `seed + k`, which must stay clear of
 /// the selection's.
+/// Most inner folds: the keep gate's fold test enumerates their 2^k sign patterns.
+const MAX_INNER_FOLDS: usize = 20;
 const MAX_SEARCH_STARTS: usize = 10;
 /// Most simulations a run for the metrics (ours: far past where more repeats change a metric, and a bound on the
 /// memory the simulations of a calibration hold).
@@ -663,6 +665,16 @@ impl CalibrationConfig {
         }
         if self.inner_folds < 2 || self.outer_folds < 2 {
             return Err(Error::invalid(f("inner_folds / outer_folds"), "must be at least 2", "use for example 5"));
+        }
+        if self.inner_folds > MAX_INNER_FOLDS {
+            return Err(Error::invalid(
+                f("inner_folds"),
+                format!(
+                    "must be at most {MAX_INNER_FOLDS} (the keep gate's fold test enumerates 2^folds sign patterns), got {}",
+                    self.inner_folds
+                ),
+                "use for example 5",
+            ));
         }
         if !(1..=MAX_RELEASE_ATTEMPTS).contains(&self.release_attempts) {
             return Err(Error::invalid(
@@ -1017,6 +1029,8 @@ mod tests {
         assert!(e.contains("c.toml: release_attempts") && e.contains("got 0"), "{e}");
         let e = CalibrationConfig::from_toml_str("rest_noise_m = -0.5\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: rest_noise_m") && e.contains("non-negative"), "{e}");
+        let e = CalibrationConfig::from_toml_str("inner_folds = 21\n", "c.toml").unwrap_err().to_string();
+        assert!(e.contains("c.toml: inner_folds") && e.contains("got 21"), "{e}");
         let e = CalibrationConfig::from_toml_str("outer_repeats = 11\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: outer_repeats") && e.contains("got 11"), "{e}");
         assert_eq!((cfg.search_repeats, cfg.screen_repeats()), (4, 20));

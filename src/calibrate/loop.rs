@@ -96,8 +96,8 @@ pub struct EffectTrial {
     /// predicts better). A fold's runs share its refitted parameters, so a cut carried by one fold's refit shows here.
     #[serde(default)]
     pub fold_cuts_m: Vec<f64>,
-    /// The exact one-sided sign-flip p-value over the folds' summed cuts (at least 2^−folds; recorded, not used to
-    /// decide).
+    /// The exact one-sided sign-flip p-value over the folds' summed cuts (at least 2^−folds), which `fold_test`
+    /// asks to reach `alpha` too.
     #[serde(default)]
     pub fold_p_value: f64,
     /// Kept.
@@ -356,14 +356,16 @@ pub fn effects_loop(
             let diffs: Vec<f64> = before.iter().zip(&after).map(|(a, b)| a.crps_m - b.crps_m).collect();
             let mut rng = stream(cfg.seed, u64::MAX - 4000 - round as u64);
             let p = paired_sign_flip_p(&diffs, cfg.effects.permutations, &mut rng);
-            let fold_sums: Vec<f64> = (0..fold_of.iter().max().map_or(0, |k| k + 1))
-                .map(|f| diffs.iter().zip(&fold_of).filter(|(_, &k)| k == f).map(|(d, _)| d).sum())
+            // Each inner fold that holds runs: the sum of its runs' differences, and their number.
+            let fold_totals: Vec<(f64, usize)> = (0..cfg.inner_folds)
+                .map(|f| {
+                    let d: Vec<f64> = diffs.iter().zip(&fold_of).filter(|(_, &k)| k == f).map(|(d, _)| *d).collect();
+                    (d.iter().sum(), d.len())
+                })
+                .filter(|&(_, n)| n > 0)
                 .collect();
-            let fold_cuts_m: Vec<f64> = fold_sums
-                .iter()
-                .enumerate()
-                .map(|(f, sum)| sum / fold_of.iter().filter(|&&k| k == f).count().max(1) as f64)
-                .collect();
+            let fold_sums: Vec<f64> = fold_totals.iter().map(|&(sum, _)| sum).collect();
+            let fold_cuts_m: Vec<f64> = fold_totals.iter().map(|&(sum, n)| sum / n as f64).collect();
             let fold_p = exact_sign_flip_p(&fold_sums);
             let improvement = if mb > 0.0 { 1.0 - ma / mb } else { 0.0 };
             let effect_params: BTreeMap<String, f64> = full
