@@ -363,6 +363,12 @@ pub fn calibrate(
         },
         settings: cfg.resolved(model.kind()),
     };
+    let unrested =
+        (report.baseline.calibration.not_stopped_fraction, report.final_stage.calibration.not_stopped_fraction);
+    if let Some(w) = report::unrested_warning(unrested.0, unrested.1) {
+        log(&format!("warning: {w}"));
+        report.warnings.push(w);
+    }
     report.timing.total_s = t0.elapsed().as_secs_f64();
     report.timing.final_evaluation_s = report.timing.total_s - t_loop;
     report.timing.simulations = ctx.simulations.load(std::sync::atomic::Ordering::Relaxed);

@@ -919,11 +919,39 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
     s
 }
 
+/// Share of a model's simulations of the calibration runs not at rest above which the report warns (ours).
+pub const UNRESTED_WARNING_SHARE: f64 = 0.1;
+
+/// The warning for a calibration whose simulations of the calibration runs often do not come to rest, by the
+/// baseline's and the final model's share (`not_stopped_fraction`); none when both are at most
+/// [`UNRESTED_WARNING_SHARE`]. Such a run-out is taken where the rock left the terrain or stood at the time limit,
+/// short of where it would stop, so the fit and its errors say less about where rocks stop.
+pub fn unrested_warning(baseline_share: f64, final_share: f64) -> Option<String> {
+    (baseline_share.max(final_share) > UNRESTED_WARNING_SHARE).then(|| {
+        format!(
+            "{:.0} % of the baseline's and {:.0} % of the final model's simulations of the calibration runs did not \
+             come to rest: their run-out is where they left the terrain or stood at `max_time_s`, short of where they \
+             would stop, so the fit and its errors say less about where rocks stop. Extend the terrain beyond the \
+             field's rest points, or raise `[simulation] max_time_s`, so that simulated rocks can stop",
+            100.0 * baseline_share,
+            100.0 * final_share
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::calibrate::metrics::metrics;
     use crate::calibrate::metrics::tests::{run, sims};
+
+    #[test]
+    fn a_calibration_whose_rocks_often_do_not_stop_is_warned_of() {
+        assert_eq!(unrested_warning(0.015, 0.1), None);
+        let w = unrested_warning(1.0, 0.14).unwrap();
+        assert!(w.starts_with("100 % of the baseline's and 14 % of the final model's"), "{w}");
+        assert!(unrested_warning(0.05, 0.2).is_some());
+    }
 
     #[test]
     fn a_missed_aim_that_a_right_model_would_miss_too_is_marked_apart() {
