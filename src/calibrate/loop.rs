@@ -108,6 +108,13 @@ pub struct EffectTrial {
     pub region: Option<Region>,
 }
 
+impl EffectTrial {
+    /// The inner folds whose runs the effect predicts better.
+    pub fn folds_better(&self) -> usize {
+        self.fold_cuts_m.iter().filter(|&&c| c > 0.0).count()
+    }
+}
+
 /// An effect kept by the loop.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct AddedEffect {
@@ -401,7 +408,7 @@ pub fn effects_loop(
                 -100.0 * improvement,
                 mae(&before),
                 mae(&after),
-                trial.fold_cuts_m.iter().filter(|&&c| c > 0.0).count(),
+                trial.folds_better(),
                 trial.fold_cuts_m.len(),
                 trial.fold_cuts_m.iter().map(|c| format!("{c:+.2}")).collect::<Vec<_>>().join(" ")
             ));

@@ -871,7 +871,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
                 t.cv_crps_after_m,
                 -100.0 * t.relative_improvement,
                 t.p_value,
-                t.fold_cuts_m.iter().filter(|&&c| c > 0.0).count(),
+                t.folds_better(),
                 t.fold_cuts_m.len(),
                 t.fold_p_value,
                 t.cv_runout_mae_before_m,
