@@ -486,10 +486,10 @@ impl Default for CalibrationConfig {
     }
 }
 
+/// Most inner folds: the keep gate's fold test enumerates their 2^k sign patterns.
+const MAX_INNER_FOLDS: usize = super::stats::MAX_EXACT_SIGN_FLIP_UNITS;
 /// Most population-fit searches per start point: search k uses the streams of `seed + k`, which must stay clear of
 /// the selection's.
-/// Most inner folds: the keep gate's fold test enumerates their 2^k sign patterns.
-const MAX_INNER_FOLDS: usize = 20;
 const MAX_SEARCH_STARTS: usize = 10;
 /// Most simulations a run for the metrics (ours: far past where more repeats change a metric, and a bound on the
 /// memory the simulations of a calibration hold).

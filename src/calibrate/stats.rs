@@ -159,12 +159,19 @@ pub fn paired_sign_flip_p(d: &[f64], permutations: usize, rng: &mut Rng) -> f64 
     (1 + hits) as f64 / (1 + permutations) as f64
 }
 
+/// Most units [`exact_sign_flip_p`] takes (2^20 patterns).
+pub const MAX_EXACT_SIGN_FLIP_UNITS: usize = 20;
+
 /// Exact one-sided sign-flip test of H1: sum(d) > 0 over a few independent units (e.g. the inner folds of a
 /// cross-validation, whose runs share the fold's refitted parameters and so are not independent of each other):
 /// the share of all 2^k sign patterns whose sum reaches the observed one, counting the observed itself (so never
-/// below 2^-k). 1 when `d` is empty; `d` holds at most 20 units.
+/// below 2^-k). 1 when `d` is empty; `d` holds at most [`MAX_EXACT_SIGN_FLIP_UNITS`] units.
 pub fn exact_sign_flip_p(d: &[f64]) -> f64 {
-    assert!(d.len() <= 20, "an exact sign-flip test enumerates 2^k patterns; k = {} is too many", d.len());
+    assert!(
+        d.len() <= MAX_EXACT_SIGN_FLIP_UNITS,
+        "an exact sign-flip test enumerates 2^k patterns; k = {} is too many",
+        d.len()
+    );
     let observed: f64 = d.iter().sum();
     let patterns = 1usize << d.len();
     let hits = (0..patterns)
