@@ -30,6 +30,7 @@
 //! min_improvement = 0.05    # relative cut of the cross-validated mean CRPS to keep an effect
 //! alpha = 0.05              # and the one-sided paired permutation p-value it must reach
 //! fold_test = true          # and the exact sign-flip test over the inner folds (5 folds: every fold better)
+//! bonferroni = true         # the per-run p must reach alpha / (effects the round signalled)
 //! # screen_repeats = 20     # simulations per run in the loop's grid screening (default: repeats)
 //! race_repeats = 4          # a first look at every grid setting; the folds' best go on to screen_repeats (0: off)
 //! one_se_rule = true        # of the effects that pass, the simplest within one standard error of the best
@@ -317,6 +318,13 @@ pub struct EffectsConfig {
     /// cut that one or two folds make (docs/calibration.md, "Every fold must agree"). False: the per-run test alone,
     /// as until 2026-11-30.
     pub fold_test: bool,
+    /// The per-run test's `alpha` is divided by the number of effects the round signalled (Bonferroni; default
+    /// true). The loop tries several effects and keeps the best that passes, so at `alpha` each a campaign without
+    /// any effect passes one with a chance near m·`alpha` (1 − 0.95⁴ = 19 % for four tried); dividing holds that
+    /// chance to `alpha` (Bonferroni 1936; Dunn 1961). The effects the synthetic campaigns hide reach p = 0.001 to
+    /// 0.003, below 0.05/6 (docs/calibration.md, "Best of several"). False: each effect at `alpha`, as until
+    /// 2026-12-01.
+    pub bonferroni: bool,
     /// Each arm of an effect with a parameter also fits the model with the effect again, as the population fit
     /// fitted the baseline (its start points and screening), on each inner fold's training runs and on all
     /// calibration runs, and offers those fits to the screening beside the re-centred grid; the baseline's arm gets
@@ -346,6 +354,7 @@ impl Default for EffectsConfig {
             restart_arms: false,
             refit_check: false,
             fold_test: true,
+            bonferroni: true,
             fit_arms: None,
         }
     }

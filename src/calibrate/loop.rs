@@ -37,7 +37,9 @@
 //! **"Clearly improves"** (ours): the out-of-fold mean CRPS falls by at least `min_improvement` (5 %), a
 //! one-sided paired sign-flip permutation test on the per-run CRPS differences gives p ≤ `alpha` (0.05), and the
 //! exact sign-flip test on the inner folds' summed differences does too (`fold_test`; with 5 folds: every fold
-//! better), since a fold's runs share that fold's refitted parameters and are not independent of each other. Among
+//! better), since a fold's runs share that fold's refitted parameters and are not independent of each other. The
+//! per-run test's `alpha` is divided by the number of effects the round signalled (`bonferroni`): the round keeps
+//! the best of several, and each at `alpha` would let a campaign without any effect through far more often. Among
 //! the effects that pass, the one with the fewest added parameters whose out-of-fold CRPS is within one standard
 //! error of the best one's is kept (the one-standard-error rule, `choose`; `one_se_rule = false`: the largest
 //! cut), then refitted with the optimiser (together with the base parameters), and the loop starts again.
@@ -92,6 +94,10 @@ pub struct EffectTrial {
     pub relative_improvement: f64,
     /// One-sided paired permutation p-value.
     pub p_value: f64,
+    /// The largest `p_value` that passed in this trial's round: `alpha`, divided by the effects the round signalled
+    /// under `bonferroni` (0 in reports before 2026-12-01, when it was `alpha`).
+    #[serde(default)]
+    pub p_threshold: f64,
     /// Per inner fold, the mean cut of the CRPS over the fold's runs (before − after, m; positive where the effect
     /// predicts better). A fold's runs share its refitted parameters, so a cut carried by one fold's refit shows here.
     #[serde(default)]
@@ -265,6 +271,14 @@ pub fn effects_loop(
         let (e0_grid, base_chosen) = cross_validate(ctx, cal, &fold_of, &base_arm.settings, &base_arm.fold_settings);
         let mut e0_refit: Option<Vec<CvError>> = None;
         let mut passed: Vec<Passed> = Vec::new();
+        let signalled = batch.len() + waiting.len();
+        let run_alpha = per_run_alpha(&cfg.effects, signalled);
+        if run_alpha < cfg.effects.alpha {
+            (ctx.log)(&format!(
+                "effects loop, round {round}: {signalled} effects signalled; each must reach p <= {run_alpha:.4} over the runs (alpha {} / {signalled}, [effects] bonferroni)",
+                cfg.effects.alpha
+            ));
+        }
         // With `restart_arms`, the current model with its materials back at the settings' start, shared by the arms.
         let restart_from = cfg.effects.restart_arms.then(|| with_start_materials(ctx, &current));
         // Each proposal's arm; `in_batches` decides which are tried.
@@ -396,6 +410,7 @@ pub fn effects_loop(
                 cv_runout_mae_after_m: mae(&after),
                 relative_improvement: improvement,
                 p_value: p,
+                p_threshold: run_alpha,
                 fold_cuts_m,
                 fold_p_value: fold_p,
                 kept: false,
@@ -415,7 +430,7 @@ pub fn effects_loop(
             // With k folds no pattern but the observed one reaches p = 2^-k: there, every fold better.
             let fold_alpha = cfg.effects.alpha.max(0.5f64.powi(fold_sums.len() as i32));
             let passes = improvement >= cfg.effects.min_improvement
-                && p <= cfg.effects.alpha
+                && p <= run_alpha
                 && (!cfg.effects.fold_test || fold_p <= fold_alpha)
                 && full.effect(&prop.label).is_some();
             out.trials.push(trial.clone());
@@ -505,14 +520,16 @@ pub fn effects_loop(
             "cv_runout_mae_after_m": trial.cv_runout_mae_after_m,
             "relative_improvement": trial.relative_improvement,
             "p_value": trial.p_value,
+            "p_threshold": trial.p_threshold,
             "fold_cuts_m": trial.fold_cuts_m,
             "fold_p_value": trial.fold_p_value,
             "inner_folds": cfg.inner_folds,
             "criterion": format!(
-                "relative improvement >= {} and one-sided paired permutation p <= {}{}",
+                "relative improvement >= {} and one-sided paired permutation p <= {} over the runs{}{}",
                 cfg.effects.min_improvement,
-                cfg.effects.alpha,
-                if cfg.effects.fold_test { " over the runs and over the inner folds" } else { "" }
+                trial.p_threshold,
+                if cfg.effects.bonferroni { " (alpha over the effects the round signalled)" } else { "" },
+                if cfg.effects.fold_test { format!(" and <= {} over the inner folds", cfg.effects.alpha) } else { String::new() }
             ),
             "added_parameters": added_parameters,
             "selection": if cfg.effects.one_se_rule { SELECTION_ONE_SE } else { SELECTION_BEST },
@@ -556,6 +573,16 @@ fn in_batches<P>(
         let n = max.clamp(1, waiting.len());
         batch = waiting.drain(..n).collect();
         next(n, waiting.len());
+    }
+}
+
+/// The largest per-run p-value that keeps an effect in a round that signalled `signalled` effects: `alpha`, divided
+/// by their number under `bonferroni`.
+fn per_run_alpha(effects: &super::config::EffectsConfig, signalled: usize) -> f64 {
+    if effects.bonferroni {
+        effects.alpha / signalled.max(1) as f64
+    } else {
+        effects.alpha
     }
 }
 
@@ -1398,6 +1425,18 @@ mod tests {
         let differ: Vec<usize> = (0..a.len()).filter(|&i| a[i] != b[i]).collect();
         let first = |v: &[String]| differ.first().map(|&i| v[i].chars().take(100).collect::<String>());
         assert!(differ.is_empty(), "{} of {} differ: {:?} against {:?}", differ.len(), a.len(), first(&a), first(&b));
+    }
+
+    /// Bonferroni: a round that signalled four effects asks p <= 0.0125 of each; one that signalled none (no trial
+    /// follows) or one asks `alpha`, and so does every round with the correction off.
+    #[test]
+    fn the_per_run_alpha_is_shared_among_the_effects_a_round_signalled() {
+        let on = super::super::config::EffectsConfig::default();
+        assert_eq!(per_run_alpha(&on, 4), 0.0125);
+        assert_eq!(per_run_alpha(&on, 1), 0.05);
+        assert_eq!(per_run_alpha(&on, 0), 0.05);
+        let off = super::super::config::EffectsConfig { bonferroni: false, ..on };
+        assert_eq!(per_run_alpha(&off, 4), 0.05);
     }
 
     /// The 2DLM `control_a` campaign (data seed 1) several tests run on: its spec, its model, all its runs as

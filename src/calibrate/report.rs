@@ -853,7 +853,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             s,
             "\nOut-of-fold scores inside the calibration runs (CRPS decides; run-out MAE shown beside it).\n"
         );
-        let _ = writeln!(s, "| round | effect | proposed by | CV CRPS before (m) | after (m) | cut | p | folds better (fold p) | CV MAE before → after (m) | kept |");
+        let _ = writeln!(s, "| round | effect | proposed by | CV CRPS before (m) | after (m) | cut | p (needed) | folds better (fold p) | CV MAE before → after (m) | kept |");
         let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|");
         for t in &r.effects_tried {
             let by: Vec<String> = t
@@ -863,7 +863,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
                 .collect();
             let _ = writeln!(
                 s,
-                "| {} | {} | {} | {:.2} | {:.2} | {:+.1} % | {:.3} | {} of {} ({:.3}) | {:.2} → {:.2} | {} |",
+                "| {} | {} | {} | {:.2} | {:.2} | {:+.1} % | {:.3} (≤ {:.4}) | {} of {} ({:.3}) | {:.2} → {:.2} | {} |",
                 t.round,
                 t.label,
                 by.join("; "),
@@ -871,6 +871,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
                 t.cv_crps_after_m,
                 -100.0 * t.relative_improvement,
                 t.p_value,
+                t.p_threshold,
                 t.folds_better(),
                 t.fold_cuts_m.len(),
                 t.fold_p_value,
