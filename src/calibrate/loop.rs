@@ -1419,7 +1419,7 @@ mod tests {
         // the bit: Debug writes the shortest decimal that reads back as the same f64.
         let ends = |rs: &[RunSims]| -> Vec<String> {
             let sims = rs.iter().flat_map(|r| &r.sims);
-            sims.map(|s| format!("{:?} {:?} {} {:?}", s.runout_m, s.rest_m, s.stopped, s.path)).collect()
+            sims.map(|s| format!("{:?} {:?} {:?} {:?}", s.runout_m, s.rest_m, s.end, s.path)).collect()
         };
         let (a, b) = (ends(&reused), ends(&fresh));
         let differ: Vec<usize> = (0..a.len()).filter(|&i| a[i] != b[i]).collect();

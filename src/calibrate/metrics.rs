@@ -28,7 +28,7 @@
 //! what the number of runs allows; a coverage above its yardstick means simulated ranges wider than the field's.
 //! They choose nothing.
 
-use super::model::{not_at_rest, RunSims};
+use super::model::{count_ends, not_at_rest, RunSims, SimEnd};
 use super::objective::rebound_crps;
 use super::runs::FieldRun;
 use super::stats::{mean, median, quantile_sorted, sorted, wasserstein1};
@@ -67,6 +67,10 @@ pub struct Metrics {
     pub simulated_mean_m: f64,
     /// Share of simulations that did not come to rest (left the terrain or hit a time limit).
     pub not_stopped_fraction: f64,
+    /// Share of simulations that left the terrain (a 2DLM profile: either end); the rest of those not at rest ran to
+    /// the time limit (0 in reports before 2026-12-01).
+    #[serde(default)]
+    pub left_terrain_fraction: f64,
     /// Mean |median simulated − observed rebound height| over the tracked runs, m.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rebound_mae_m: Option<f64>,
@@ -113,6 +117,7 @@ pub fn metrics(runs: &[FieldRun], sims: &[RunSims]) -> Metrics {
         }
     }
     let (not_stopped, _) = not_at_rest(sims);
+    let (left_terrain, _) = count_ends(sims, |e| e == SimEnd::LeftTerrain);
     let which: Vec<usize> = sims.iter().map(|s| s.run).collect();
     let if_right = were_the_model_right(sims);
     let tracked: Vec<&RunSims> = sims.iter().filter(|s| runs[s.run].rebound_height_m.is_some()).collect();
@@ -137,7 +142,8 @@ pub fn metrics(runs: &[FieldRun], sims: &[RunSims]) -> Metrics {
         repeats: sims.first().map(|s| s.sims.len()).unwrap_or(0),
         observed_mean_m: mean(&obs),
         simulated_mean_m: mean(&all),
-        not_stopped_fraction: if all.is_empty() { 0.0 } else { not_stopped as f64 / all.len() as f64 },
+        not_stopped_fraction: share(not_stopped, all.len()),
+        left_terrain_fraction: share(left_terrain, all.len()),
     }
 }
 
@@ -244,6 +250,15 @@ pub fn run_errors(runs: &[FieldRun], sims: &[RunSims]) -> Vec<f64> {
     sims.iter().map(|s| (s.median_runout() - runs[s.run].runout_m).abs()).collect()
 }
 
+/// `n` of `of` as a share (0 of none).
+fn share(n: usize, of: usize) -> f64 {
+    if of == 0 {
+        0.0
+    } else {
+        n as f64 / of as f64
+    }
+}
+
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
@@ -290,7 +305,7 @@ pub(crate) mod tests {
                 .map(|&v| Sim {
                     runout_m: v,
                     rest_m: [v, 0.0, 0.0],
-                    stopped: true,
+                    end: super::super::model::SimEnd::Rest,
                     summary: PathSummary::default(),
                     path: vec![],
                 })

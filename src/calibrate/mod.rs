@@ -363,9 +363,7 @@ pub fn calibrate(
         },
         settings: cfg.resolved(model.kind()),
     };
-    let unrested =
-        (report.baseline.calibration.not_stopped_fraction, report.final_stage.calibration.not_stopped_fraction);
-    if let Some(w) = report::unrested_warning(unrested.0, unrested.1) {
+    if let Some(w) = report::unrested_warning(&report.baseline.calibration, &report.final_stage.calibration) {
         log(&format!("warning: {w}"));
         report.warnings.push(w);
     }

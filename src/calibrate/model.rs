@@ -43,6 +43,17 @@ pub struct PathSummary {
     pub tangential_restitutions: Vec<f64>,
 }
 
+/// How a simulation ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SimEnd {
+    /// At rest.
+    Rest,
+    /// Left the terrain (3DRB: no surface under the centre) or either end of the profile (2DLM).
+    LeftTerrain,
+    /// Ran to `max_time_s` (or, in 2DLM, to the profile engine's event limit).
+    Limit,
+}
+
 /// One simulation of one run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sim {
@@ -50,8 +61,8 @@ pub struct Sim {
     pub runout_m: f64,
     /// End position in the campaign's frame, m.
     pub rest_m: [f64; 3],
-    /// True if the rock came to rest (false: it left the terrain or hit a time limit).
-    pub stopped: bool,
+    /// How it ended.
+    pub end: SimEnd,
     /// Path summary.
     pub summary: PathSummary,
     /// The horizontal path, thinned to about 1 m spacing, campaign frame (y = 0 on a profile).
@@ -74,10 +85,15 @@ pub struct RunSims {
     pub sims: Vec<Sim>,
 }
 
+/// How many of `sims` ended as `which` says, and how many there are.
+pub fn count_ends(sims: &[RunSims], which: impl Fn(SimEnd) -> bool) -> (usize, usize) {
+    let all = || sims.iter().flat_map(|r| &r.sims);
+    (all().filter(|x| which(x.end)).count(), all().count())
+}
+
 /// How many of `sims` did not come to rest (left the terrain or ran to the time limit), and how many there are.
 pub fn not_at_rest(sims: &[RunSims]) -> (usize, usize) {
-    let all = || sims.iter().flat_map(|r| &r.sims);
-    (all().filter(|x| !x.stopped).count(), all().count())
+    count_ends(sims, |e| e != SimEnd::Rest)
 }
 
 impl RunSims {
@@ -442,7 +458,7 @@ mod tests {
         fn simulate(&self, _run: &FieldRun, _repeat: usize, seed: u64) -> Sim {
             self.seeds.lock().unwrap().push(seed);
             let runout_m = if seed == self.runs_on { 50.0 } else { 0.0 };
-            Sim { runout_m, rest_m: [0.0; 3], stopped: true, summary: PathSummary::default(), path: Vec::new() }
+            Sim { runout_m, rest_m: [0.0; 3], end: SimEnd::Rest, summary: PathSummary::default(), path: Vec::new() }
         }
     }
 

@@ -6,7 +6,7 @@ use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::impacts::{read_impacts, tangential_restitutions_as_tracked, Impact};
 use super::measured::{Measured, MIN_BOUNCES_MEASURED};
-use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Reading, Sim};
+use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Reading, Sim, SimEnd};
 use super::params::{apply_mobility_2d, Candidate, Params, Region};
 use super::rebound::{attach_tracks, rebound_meter, ReboundMeter};
 use super::runs::{FieldRun, ReleaseGroups};
@@ -374,7 +374,11 @@ impl Prepared for Prepared2d<'_> {
         Sim {
             runout_m: r.runout_m,
             rest_m: [r.end_x_m, 0.0, r.end_z_m],
-            stopped: r.stop_reason == StopReason::Stopped,
+            end: match r.stop_reason {
+                StopReason::Stopped => SimEnd::Rest,
+                StopReason::LeftProfile => SimEnd::LeftTerrain,
+                StopReason::MaxEvents | StopReason::MaxTime => SimEnd::Limit,
+            },
             summary,
             path,
         }

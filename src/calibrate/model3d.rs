@@ -5,7 +5,7 @@
 use super::config::{CalibrationConfig, ModelKind};
 use super::effects::EffectKind;
 use super::impacts::{read_impacts, tangential_restitutions_as_tracked};
-use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Reading, Sim};
+use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Reading, Sim, SimEnd};
 use super::params::{apply_mobility_3d, Candidate, Params, Region};
 use super::rebound::{attach_tracks, rebound_meter, ReboundMeter};
 use super::runs::{FieldRun, ReleaseGroups};
@@ -599,7 +599,11 @@ impl Prepared3d<'_> {
         Sim {
             runout_m: d.x.hypot(d.y),
             rest_m: file_end,
-            stopped: out.stop_reason == StopReason::Stopped,
+            end: match out.stop_reason {
+                StopReason::Stopped | StopReason::Barrier => SimEnd::Rest,
+                StopReason::LeftTerrain => SimEnd::LeftTerrain,
+                StopReason::MaxTime => SimEnd::Limit,
+            },
             summary,
             path,
         }

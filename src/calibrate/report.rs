@@ -923,19 +923,32 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
 /// Share of a model's simulations of the calibration runs not at rest above which the report warns (ours).
 pub const UNRESTED_WARNING_SHARE: f64 = 0.1;
 
-/// The warning for a calibration whose simulations of the calibration runs often do not come to rest, by the
-/// baseline's and the final model's share (`not_stopped_fraction`); none when both are at most
-/// [`UNRESTED_WARNING_SHARE`]. Such a run-out is taken where the rock left the terrain or stood at the time limit,
-/// short of where it would stop, so the fit and its errors say less about where rocks stop.
-pub fn unrested_warning(baseline_share: f64, final_share: f64) -> Option<String> {
-    (baseline_share.max(final_share) > UNRESTED_WARNING_SHARE).then(|| {
+/// The warning for a calibration whose simulations of the calibration runs often do not come to rest, from the
+/// baseline's and the final model's metrics of them (`not_stopped_fraction`, `left_terrain_fraction`); none when
+/// both shares are at most [`UNRESTED_WARNING_SHARE`]. Such a run-out is taken where the rock left the terrain or
+/// stood at the time limit, short of where it would stop, so the fit and its errors say less about where rocks stop.
+/// The remedy it names follows how they ended: a larger terrain for those that left it, a longer time for the rest.
+pub fn unrested_warning(baseline: &Metrics, final_model: &Metrics) -> Option<String> {
+    let (b, f) = (baseline.not_stopped_fraction, final_model.not_stopped_fraction);
+    let (b_left, f_left) = (baseline.left_terrain_fraction, final_model.left_terrain_fraction);
+    (b.max(f) > UNRESTED_WARNING_SHARE).then(|| {
+        let mut remedies = Vec::new();
+        if b_left.max(f_left) > 0.0 {
+            remedies.push("extend the terrain beyond the field's rest points");
+        }
+        if b - b_left > 0.0 || f - f_left > 0.0 {
+            remedies.push("raise `[simulation] max_time_s`");
+        }
         format!(
             "{:.0} % of the baseline's and {:.0} % of the final model's simulations of the calibration runs did not \
-             come to rest: their run-out is where they left the terrain or stood at `max_time_s`, short of where they \
-             would stop, so the fit and its errors say less about where rocks stop. Extend the terrain beyond the \
-             field's rest points, or raise `[simulation] max_time_s`, so that simulated rocks can stop",
-            100.0 * baseline_share,
-            100.0 * final_share
+             come to rest ({:.0} % and {:.0} % left the terrain, the others ran to the time limit): their run-out is \
+             where they were then, short of where they would stop, so the fit and its errors say less about where \
+             rocks stop. To let simulated rocks stop, {}",
+            100.0 * b,
+            100.0 * f,
+            100.0 * b_left,
+            100.0 * f_left,
+            remedies.join(", or ")
         )
     })
 }
@@ -948,10 +961,19 @@ mod tests {
 
     #[test]
     fn a_calibration_whose_rocks_often_do_not_stop_is_warned_of() {
-        assert_eq!(unrested_warning(0.015, 0.1), None);
-        let w = unrested_warning(1.0, 0.14).unwrap();
+        let m = |not_stopped_fraction, left_terrain_fraction| Metrics {
+            not_stopped_fraction,
+            left_terrain_fraction,
+            ..metrics(&[run(0, 0, 10.0)], &[sims(0, &[10.0])])
+        };
+        assert_eq!(unrested_warning(&m(0.015, 0.015), &m(0.1, 0.0)), None);
+        let w = unrested_warning(&m(1.0, 1.0), &m(0.14, 0.14)).unwrap();
         assert!(w.starts_with("100 % of the baseline's and 14 % of the final model's"), "{w}");
-        assert!(unrested_warning(0.05, 0.2).is_some());
+        assert!(w.contains("(100 % and 14 % left the terrain") && w.ends_with("the field's rest points"), "{w}");
+        let w = unrested_warning(&m(0.05, 0.0), &m(0.2, 0.0)).unwrap();
+        assert!(w.ends_with("raise `[simulation] max_time_s`"), "{w}");
+        let w = unrested_warning(&m(0.3, 0.1), &m(0.3, 0.1)).unwrap();
+        assert!(w.contains("rest points, or raise"), "{w}");
     }
 
     #[test]

@@ -309,7 +309,7 @@ mod tests {
                     .map(|&d| super::super::model::Sim {
                         runout_m: d,
                         rest_m: [d, runs[i].release_m[1], 0.0],
-                        stopped: true,
+                        end: super::super::model::SimEnd::Rest,
                         summary: Default::default(),
                         path: (0..=d as usize).map(|x| [x as f32, runs[i].release_m[1] as f32]).collect(),
                     })
