@@ -932,22 +932,24 @@ pub fn unrested_warning(baseline: &Metrics, final_model: &Metrics) -> Option<Str
     let (b, f) = (baseline.not_stopped_fraction, final_model.not_stopped_fraction);
     let (b_left, f_left) = (baseline.left_terrain_fraction, final_model.left_terrain_fraction);
     (b.max(f) > UNRESTED_WARNING_SHARE).then(|| {
+        let (b_limit, f_limit) = (b - b_left, f - f_left);
+        let mut how = Vec::new();
         let mut remedies = Vec::new();
         if b_left.max(f_left) > 0.0 {
+            how.push(format!("{:.0} % and {:.0} % left the terrain", 100.0 * b_left, 100.0 * f_left));
             remedies.push("extend the terrain beyond the field's rest points");
         }
-        if b - b_left > 0.0 || f - f_left > 0.0 {
+        if b_limit.max(f_limit) > 0.0 {
+            how.push(format!("{:.0} % and {:.0} % ran to the time limit", 100.0 * b_limit, 100.0 * f_limit));
             remedies.push("raise `[simulation] max_time_s`");
         }
         format!(
             "{:.0} % of the baseline's and {:.0} % of the final model's simulations of the calibration runs did not \
-             come to rest ({:.0} % and {:.0} % left the terrain, the others ran to the time limit): their run-out is \
-             where they were then, short of where they would stop, so the fit and its errors say less about where \
-             rocks stop. To let simulated rocks stop, {}",
+             come to rest ({}): their run-out is where they were then, short of where they would stop, so the fit and \
+             its errors say less about where rocks stop. To let simulated rocks stop, {}",
             100.0 * b,
             100.0 * f,
-            100.0 * b_left,
-            100.0 * f_left,
+            how.join("; "),
             remedies.join(", or ")
         )
     })
@@ -972,8 +974,9 @@ mod tests {
         assert!(w.contains("(100 % and 14 % left the terrain") && w.ends_with("the field's rest points"), "{w}");
         let w = unrested_warning(&m(0.05, 0.0), &m(0.2, 0.0)).unwrap();
         assert!(w.ends_with("raise `[simulation] max_time_s`"), "{w}");
+        assert!(w.contains("(5 % and 20 % ran to the time limit)"), "{w}");
         let w = unrested_warning(&m(0.3, 0.1), &m(0.3, 0.1)).unwrap();
-        assert!(w.contains("rest points, or raise"), "{w}");
+        assert!(w.contains("left the terrain; 20 % and 20 % ran to") && w.contains("rest points, or raise"), "{w}");
     }
 
     #[test]
