@@ -753,11 +753,12 @@ fn rigid_body_loop_finds_a_hidden_soft_zone() {
     let Some(Region::Polygon(p)) = named_with_cut(&r, "zone").region.clone() else { panic!("no polygon") };
     let (share, centroid_inside) = zone_overlap(&p, &standard_zone());
     assert!(share > 0.5 && centroid_inside, "zone {p:?} lies {:.0} % in the hidden one", 100.0 * share);
-    // The baseline's boulders roll off the plain's far edge: the report says their run-outs are not rest points.
-    // They leave it (none stands at the time limit), and the warning names the remedy for that.
+    // The baseline's boulders roll off the plain's far edge, or are still rolling at these tests' 30 s limit: the
+    // report says their run-outs are not rest points, and names the remedy for each.
     let m = &r.baseline.calibration;
-    assert!(m.not_stopped_fraction > 0.5 && m.left_terrain_fraction == m.not_stopped_fraction, "{m:?}");
-    let warned = |w: &String| w.contains("did not come to rest") && w.ends_with("beyond the field's rest points");
+    assert!(m.not_stopped_fraction > 0.5, "{m:?}");
+    assert!(m.left_terrain_fraction > 0.0 && m.left_terrain_fraction < m.not_stopped_fraction, "{m:?}");
+    let warned = |w: &String| w.contains("did not come to rest") && w.contains("rest points, or raise `[simulation]");
     assert!(r.warnings.iter().any(warned), "{:?}", r.warnings);
 }
 
