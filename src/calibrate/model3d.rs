@@ -600,6 +600,7 @@ impl Prepared3d<'_> {
             runout_m: d.x.hypot(d.y),
             rest_m: file_end,
             end: match out.stop_reason {
+                // A calibration places no barrier; one that caught the rock would have stopped it.
                 StopReason::Stopped | StopReason::Barrier => SimEnd::Rest,
                 StopReason::LeftTerrain => SimEnd::LeftTerrain,
                 StopReason::MaxTime => SimEnd::Limit,
