@@ -1,6 +1,7 @@
 //! Barriers in the engine, candidate lines on the terrain, and the `talus barrier` study.
 
 use nalgebra::{UnitQuaternion, Vector3};
+use serde_json::json;
 use std::path::{Path, PathBuf};
 use talus::barrier::design::ModelDesign;
 use talus::barrier::{
@@ -503,6 +504,18 @@ fn the_shipped_tschamut_barrier_site_takes_a_calibrated_model() {
     let offsets = cands.iter().filter(|c| matches!(c.kind, CandidateKind::AssetOffset { .. })).count();
     assert_eq!(offsets, 3, "{:?}", cands.iter().map(|c| &c.name).collect::<Vec<_>>());
     assert!(cands.len() > 20);
+}
+
+/// The shipped Tschamut barrier site's own model (run without `--models`) is the shipped calibrated one, as its
+/// header says: a refit copied into `calibrated_tschamut.toml` must be copied into the site too.
+#[test]
+fn the_shipped_tschamut_barrier_site_runs_the_shipped_calibrated_model() {
+    let read = |f: &str| ScenarioFile::read(&root().join("examples").join(f)).unwrap();
+    let (site, model) = (read("barrier_tschamut.toml"), read("calibrated_tschamut.toml"));
+    let same = |a: serde_json::Value, b: serde_json::Value, table: &str| assert_eq!(a, b, "[{table}]");
+    same(json!(site.materials), json!(model.materials), "materials");
+    same(json!(site.simulation), json!(model.simulation), "simulation");
+    same(json!(site.terrain), json!(model.terrain), "terrain");
 }
 
 /// `--models` on a site given by a relative path whose campaign source is relative too (the README's command, run
