@@ -134,6 +134,14 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
     }
     let rt_row = rows.iter().find(|r| r.parameter == "rt_mean").unwrap();
     assert!((rt_row.all.mean - TRUE_2D[2]).abs() < 0.1, "{rt_row:?}");
+    // The campaign's score along each grid: the values as good as the best are within a grid step of the truth,
+    // and the run-outs pin each within two steps.
+    for (r, truth) in rows.iter().zip([TRUE_2D[0], TRUE_2D[2], TRUE_2D[4]]) {
+        let p = r.profile.as_ref().unwrap();
+        let step = p.values[1] - p.values[0];
+        assert!(p.as_good[0] - step < truth && truth < p.as_good[1] + step, "{} {truth}: {p:?}", r.parameter);
+        assert!(p.as_good[1] - p.as_good[0] <= 2.0 * step, "{}: {p:?}", r.parameter);
+    }
     assert!(c.report.effects_added.is_empty(), "{:?}", c.report.effects_added);
 }
 
@@ -307,6 +315,15 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
     assert_eq!(json["holdout_ids"].as_array().unwrap().len(), hold.len());
     // A chart of run-out residual against every covariate, each linked from report.md's table.
     let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    // Each back-analysed parameter's profile: its three grid values, the best of them as good as itself.
+    let rows = json["back_analysis"].as_array().unwrap();
+    assert!(!rows.is_empty());
+    for row in rows {
+        let p = &row["profile"];
+        assert_eq!(p["values"].as_array().unwrap().len(), 3, "{row}");
+        assert!(p["excess_m"].as_array().unwrap().iter().any(|e| e.as_f64() == Some(0.0)), "{row}");
+    }
+    assert!(md.contains("| as good as the best (grid) |") && md.contains(" values across "), "{md}");
     let runout = json["diagnostics"].as_array().unwrap().iter().filter(|d| d["residual"] == "runout");
     let covariates: Vec<&str> = runout.map(|d| d["covariate"].as_str().unwrap()).collect();
     assert!(covariates.len() > 4, "{covariates:?}");

@@ -8,8 +8,19 @@
 //! crosses more than once the crossing nearest the population value is taken; a run whose curve never meets its
 //! observation (the parameter cannot explain it within the bounds) is counted as censored and left out of mean ±
 //! sd. A single run-out cannot pin down several parameters at once, hence one at a time.
+//!
+//! **How sharply the runs pin a parameter** (ours): the same simulations give, at each grid value, the campaign's
+//! mean score (each run's run-out CRPS plus what its track adds, as the effects loop scores it). The grid values
+//! whose mean score exceeds the lowest one's by no more than two standard errors of the difference (paired over the
+//! runs, on common random numbers) are ones the calibration runs cannot tell from the best: the profile's
+//! `as_good` range. A range spanning the bounds says the data leave that parameter open, whatever value the
+//! population fit reports; the fit's own value is not compared, as it was chosen on these random numbers and would
+//! look better than it is. On 3DRB a change of Cr of 10⁻⁴ already decorrelates part of the simulated paths (a
+//! rigid body's bounces are chaotic), so the population fit's last steps there follow noise: docs/calibration.md,
+//! "How sharply the runs pin the parameters".
 
 use super::fit::Context;
+use super::objective::run_score;
 use super::params::{Candidate, FreeParam};
 use super::stats::{mean, sample_sd};
 use serde::{Deserialize, Serialize};
@@ -41,6 +52,69 @@ pub struct BackAnalysisRow {
     pub censored: usize,
     /// Per block.
     pub by_block: BTreeMap<String, Spread>,
+    /// The campaign's score along the grid (see the module notes); none where no grid value could be simulated.
+    #[serde(default)]
+    pub profile: Option<Profile>,
+}
+
+/// The calibration runs' mean score along a parameter's grid, the others at the population fit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Profile {
+    /// The grid values.
+    pub values: Vec<f64>,
+    /// Each value's mean over the runs of their score, m.
+    pub score_m: Vec<f64>,
+    /// Each value's mean score less the lowest one's, m.
+    pub excess_m: Vec<f64>,
+    /// The standard error of that difference, paired over the runs, m.
+    pub excess_se_m: Vec<f64>,
+    /// The lowest and highest grid values whose excess is within two standard errors: values the runs cannot
+    /// tell from the best.
+    pub as_good: [f64; 2],
+}
+
+impl Profile {
+    /// The values as good as the best, in words: "0.300 to 0.550 of 7 values across 0.050-0.800", "only 0.300 of
+    /// …", "all 7 values across …: the runs leave it open".
+    pub fn describe(&self) -> String {
+        let (lo, hi, n) = (self.values[0], self.values[self.values.len() - 1], self.values.len());
+        let across = format!("{n} values across {lo:.3}-{hi:.3}");
+        match self.as_good {
+            [a, b] if a <= lo && b >= hi => format!("all {across}: the runs leave it open"),
+            [a, b] if a == b => format!("only {a:.3} of {across}"),
+            [a, b] => format!("{a:.3} to {b:.3} of {across}"),
+        }
+    }
+}
+
+/// The profile of `scores[k][j]`, the score of run j at grid value `values[k]` (values that could not be simulated
+/// hold NaN scores and are left out); none if no value has scores.
+pub fn profile(values: &[f64], scores: &[Vec<f64>]) -> Option<Profile> {
+    let ok: Vec<usize> = (0..values.len()).filter(|&k| scores[k].iter().all(|v| v.is_finite())).collect();
+    let score_m: Vec<f64> = ok.iter().map(|&k| mean(&scores[k])).collect();
+    let best = (0..ok.len()).min_by(|&a, &b| score_m[a].total_cmp(&score_m[b]))?;
+    let (mut excess_m, mut excess_se_m) = (Vec::new(), Vec::new());
+    for &k in &ok {
+        let d: Vec<f64> = scores[k].iter().zip(&scores[ok[best]]).map(|(a, b)| a - b).collect();
+        excess_m.push(mean(&d));
+        excess_se_m.push(if d.len() > 1 { sample_sd(&d) / (d.len() as f64).sqrt() } else { 0.0 });
+    }
+    let as_good: Vec<f64> = ok
+        .iter()
+        .zip(excess_m.iter().zip(&excess_se_m))
+        .filter(|(_, (e, se))| **e <= 2.0 * **se)
+        .map(|(&k, _)| values[k])
+        .collect();
+    Some(Profile {
+        values: ok.iter().map(|&k| values[k]).collect(),
+        score_m,
+        excess_m,
+        excess_se_m,
+        as_good: [
+            as_good.iter().copied().fold(f64::INFINITY, f64::min),
+            as_good.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        ],
+    })
 }
 
 /// Is this a parameter the per-run back-analysis fits (locations, not spreads between rocks such as `cr_sd` or
@@ -58,15 +132,21 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
         let (material, parameter) = p.name.split_once('.').unwrap_or(("", &p.name));
         (ctx.log)(&format!("back-analysis of {}", p.name));
         let grid: Vec<f64> = (0..g).map(|k| p.min + (p.max - p.min) * k as f64 / (g - 1) as f64).collect();
-        // medians[k][j]: median run-out of run which[j] at grid value k.
-        let mut medians = Vec::with_capacity(g);
+        // medians[k][j], scores[k][j]: median run-out and score of run which[j] at grid value k.
+        let (mut medians, mut scores) = (Vec::with_capacity(g), Vec::with_capacity(g));
         for &v in &grid {
             let mut c = base.clone();
             c.params.set(p.name.clone(), v);
             super::params::normalize(&mut c.params);
             match ctx.sims(&c, which, ctx.cfg.search_repeats) {
-                Ok(s) => medians.push(s.iter().map(|r| r.median_runout()).collect::<Vec<_>>()),
-                Err(_) => medians.push(vec![f64::NAN; which.len()]),
+                Ok(s) => {
+                    medians.push(s.iter().map(|r| r.median_runout()).collect::<Vec<_>>());
+                    scores.push(s.iter().map(|r| run_score(ctx.cfg, &runs[r.run], r)).collect::<Vec<_>>());
+                }
+                Err(_) => {
+                    medians.push(vec![f64::NAN; which.len()]);
+                    scores.push(vec![f64::NAN; which.len()]);
+                }
             }
         }
         let population = base.params.get_or(&p.name, f64::NAN);
@@ -95,6 +175,14 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
                 None => censored += 1,
             }
         }
+        let profile = profile(&grid, &scores);
+        if let Some(pr) = &profile {
+            (ctx.log)(&format!(
+                "{}: the calibration runs' mean score is as good as the best at {}",
+                p.name,
+                pr.describe()
+            ));
+        }
         let spread = |v: &[f64]| Spread { mean: mean(v), sd: sample_sd(v), n: v.len() };
         rows.push(BackAnalysisRow {
             material: material.to_string(),
@@ -103,6 +191,7 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
             all: spread(&values),
             censored,
             by_block: by_block.iter().map(|(b, v)| (b.clone(), spread(v))).collect(),
+            profile,
         });
     }
     rows
@@ -110,6 +199,30 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
 
 #[cfg(test)]
 mod tests {
+    use super::profile;
+
+    #[test]
+    fn the_profile_keeps_the_values_the_runs_cannot_tell_from_the_best() {
+        let values = [0.0, 0.5, 1.0, 1.5];
+        // Three runs. Value 0.5 is best; 0.0 is worse on every run by 1 (no spread: clearly worse); 1.0 is worse on
+        // average by 0.1 but within its spread (differences 0.9, −0.5, −0.1: mean 0.1, se 0.41); 1.5 could not be
+        // simulated.
+        let scores = vec![vec![3.0, 4.0, 5.0], vec![2.0, 3.0, 4.0], vec![2.9, 2.5, 3.9], vec![f64::NAN; 3]];
+        let p = profile(&values, &scores).unwrap();
+        assert_eq!(p.values, [0.0, 0.5, 1.0]);
+        assert_eq!(p.excess_m[1], 0.0);
+        assert!((p.excess_m[0] - 1.0).abs() < 1e-12 && p.excess_se_m[0] < 1e-12);
+        assert!((p.excess_m[2] - (2.9 + 2.5 + 3.9 - 9.0) / 3.0).abs() < 1e-12);
+        assert!((p.excess_se_m[2] - 0.4163).abs() < 1e-3, "{:?}", p.excess_se_m);
+        assert_eq!(p.as_good, [0.5, 1.0]);
+        assert_eq!(p.describe(), "0.500 to 1.000 of 3 values across 0.000-1.000");
+        let open = super::Profile { as_good: [0.0, 1.0], ..p.clone() };
+        assert_eq!(open.describe(), "all 3 values across 0.000-1.000: the runs leave it open");
+        let one = super::Profile { as_good: [0.5, 0.5], ..p };
+        assert_eq!(one.describe(), "only 0.500 of 3 values across 0.000-1.000");
+        assert!(profile(&values, &vec![vec![f64::NAN]; 4]).is_none());
+    }
+
     #[test]
     fn spreads_between_rocks_are_not_back_analysed_per_run() {
         for (name, location) in [

@@ -796,15 +796,16 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
     }
     if !r.back_analysis.is_empty() {
         let _ = writeln!(s, "\n## Per-run back-analysis (mean ± sd over calibration runs)\n");
-        let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds.\n");
-        let _ = writeln!(s, "| material | parameter | population fit | mean ± sd (n) | censored | per block |");
-        let _ = writeln!(s, "|---|---|---|---|---|---|");
+        let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds. As good as the best: the values of the grid (across the bounds) at which the calibration runs' mean score is within two standard errors of the lowest (paired over the runs): where this spans the bounds, the runs leave the parameter open whatever the fit reports (docs/calibration.md, \"How sharply the runs pin the parameters\").\n");
+        let _ = writeln!(s, "| material | parameter | population fit | mean ± sd (n) | censored | per block | as good as the best (grid) |");
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|");
         for row in &r.back_analysis {
             let blocks: Vec<String> =
                 row.by_block.iter().map(|(b, sp)| format!("{b}: {:.3} ± {:.3} ({})", sp.mean, sp.sd, sp.n)).collect();
+            let good = row.profile.as_ref().map_or("–".to_string(), |p| p.describe());
             let _ = writeln!(
                 s,
-                "| {} | {} | {:.3} | {:.3} ± {:.3} ({}) | {} | {} |",
+                "| {} | {} | {:.3} | {:.3} ± {:.3} ({}) | {} | {} | {good} |",
                 row.material,
                 row.parameter,
                 row.population,
