@@ -324,6 +324,7 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
         assert!(p["excess_m"].as_array().unwrap().iter().any(|e| e.as_f64() == Some(0.0)), "{row}");
     }
     assert!(md.contains("| as good as the best (grid) |") && md.contains(" values across "), "{md}");
+    assert!(md.contains("cannot tell from the best: the last column of the back-analysis table"), "{md}");
     let runout = json["diagnostics"].as_array().unwrap().iter().filter(|d| d["residual"] == "runout");
     let covariates: Vec<&str> = runout.map(|d| d["covariate"].as_str().unwrap()).collect();
     assert!(covariates.len() > 4, "{covariates:?}");

@@ -730,11 +730,16 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             }
         }
     }
+    let band = if r.back_analysis.is_empty() {
+        ""
+    } else {
+        "; which values the calibration runs cannot tell from the best: the last column of the back-analysis table below"
+    };
     let _ = writeln!(
         s,
         "\n## Parameters\n\nOne fit on one set of random numbers; how far these values move with the runs fitted \
          and the random numbers: `talus calibrate --kfold 5 --kfold-repeats 3` (each fold's values, and their spread, \
-         in `cv_repeats.md`).\n"
+         in `cv_repeats.md`){band}.\n"
     );
     let _ = writeln!(s, "| parameter | baseline | final |");
     let _ = writeln!(s, "|---|---|---|");
