@@ -313,7 +313,6 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
         assert!(dir.path().join(f).is_file(), "missing {f}");
     }
     assert_eq!(json["holdout_ids"].as_array().unwrap().len(), hold.len());
-    // A chart of run-out residual against every covariate, each linked from report.md's table.
     let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     // Each back-analysed parameter's profile: its three grid values, the best of them as good as itself.
     let rows = json["back_analysis"].as_array().unwrap();
@@ -325,6 +324,7 @@ fn rigid_body_calibration_writes_the_report_and_ignores_the_thread_count() {
     }
     assert!(md.contains("| as good as the best (grid) |") && md.contains(" values across "), "{md}");
     assert!(md.contains("cannot tell from the best: the last column of the back-analysis table"), "{md}");
+    // A chart of run-out residual against every covariate, each linked from report.md's table.
     let runout = json["diagnostics"].as_array().unwrap().iter().filter(|d| d["residual"] == "runout");
     let covariates: Vec<&str> = runout.map(|d| d["covariate"].as_str().unwrap()).collect();
     assert!(covariates.len() > 4, "{covariates:?}");
