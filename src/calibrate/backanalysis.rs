@@ -22,7 +22,7 @@
 use super::fit::Context;
 use super::objective::run_score;
 use super::params::{Candidate, FreeParam};
-use super::stats::{mean, sample_sd};
+use super::stats::{mean, paired_excess, sample_sd};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -87,33 +87,23 @@ impl Profile {
     }
 }
 
-/// The profile of `scores[k][j]`, the score of run j at grid value `values[k]` (values that could not be simulated
-/// hold NaN scores and are left out); none if no value has scores.
+/// The profile of `scores[k][j]`, the score of run j at grid value `values[k]` (ascending; values that could not be
+/// simulated hold NaN scores and are left out); none if no value has scores.
 pub fn profile(values: &[f64], scores: &[Vec<f64>]) -> Option<Profile> {
     let ok: Vec<usize> = (0..values.len()).filter(|&k| scores[k].iter().all(|v| v.is_finite())).collect();
     let score_m: Vec<f64> = ok.iter().map(|&k| mean(&scores[k])).collect();
     let best = (0..ok.len()).min_by(|&a, &b| score_m[a].total_cmp(&score_m[b]))?;
-    let (mut excess_m, mut excess_se_m) = (Vec::new(), Vec::new());
-    for &k in &ok {
-        let d: Vec<f64> = scores[k].iter().zip(&scores[ok[best]]).map(|(a, b)| a - b).collect();
-        excess_m.push(mean(&d));
-        excess_se_m.push(if d.len() > 1 { sample_sd(&d) / (d.len() as f64).sqrt() } else { 0.0 });
-    }
-    let as_good: Vec<f64> = ok
-        .iter()
-        .zip(excess_m.iter().zip(&excess_se_m))
-        .filter(|(_, (e, se))| **e <= 2.0 * **se)
-        .map(|(&k, _)| values[k])
-        .collect();
+    let (excess_m, excess_se_m): (Vec<f64>, Vec<f64>) =
+        ok.iter().map(|&k| paired_excess(&scores[k], &scores[ok[best]])).unzip();
+    // The best value always qualifies (excess 0), so the list is never empty; the values ascend.
+    let as_good: Vec<f64> =
+        (0..ok.len()).filter(|&i| excess_m[i] <= 2.0 * excess_se_m[i]).map(|i| values[ok[i]]).collect();
     Some(Profile {
         values: ok.iter().map(|&k| values[k]).collect(),
         score_m,
         excess_m,
         excess_se_m,
-        as_good: [
-            as_good.iter().copied().fold(f64::INFINITY, f64::min),
-            as_good.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        ],
+        as_good: [as_good[0], as_good[as_good.len() - 1]],
     })
 }
 
@@ -138,16 +128,15 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
             let mut c = base.clone();
             c.params.set(p.name.clone(), v);
             super::params::normalize(&mut c.params);
-            match ctx.sims(&c, which, ctx.cfg.search_repeats) {
-                Ok(s) => {
-                    medians.push(s.iter().map(|r| r.median_runout()).collect::<Vec<_>>());
-                    scores.push(s.iter().map(|r| run_score(ctx.cfg, &runs[r.run], r)).collect::<Vec<_>>());
-                }
-                Err(_) => {
-                    medians.push(vec![f64::NAN; which.len()]);
-                    scores.push(vec![f64::NAN; which.len()]);
-                }
-            }
+            let (m, sc) = match ctx.sims(&c, which, ctx.cfg.search_repeats) {
+                Ok(s) => (
+                    s.iter().map(|r| r.median_runout()).collect(),
+                    s.iter().map(|r| run_score(ctx.cfg, &runs[r.run], r)).collect(),
+                ),
+                Err(_) => (vec![f64::NAN; which.len()], vec![f64::NAN; which.len()]),
+            };
+            medians.push(m);
+            scores.push(sc);
         }
         let population = base.params.get_or(&p.name, f64::NAN);
         let mut values = Vec::new();

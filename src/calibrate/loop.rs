@@ -60,7 +60,7 @@ use super::params::{
 };
 use super::runs::FieldRun;
 use super::split::folds;
-use super::stats::{exact_sign_flip_p, mean, paired_sign_flip_p, sample_sd};
+use super::stats::{exact_sign_flip_p, mean, paired_excess, paired_sign_flip_p};
 use super::zone::zone_check;
 use crate::random::stream;
 use serde::{Deserialize, Serialize};
@@ -619,8 +619,8 @@ fn choose(arms: &[(&[f64], usize)], one_se_rule: bool) -> Option<Pick> {
     let within_one_se: Vec<bool> = arms
         .iter()
         .map(|a| {
-            let d: Vec<f64> = a.0.iter().zip(arms[best].0).map(|(x, y)| x - y).collect();
-            mean(&d) <= sample_sd(&d) / (d.len() as f64).sqrt()
+            let (excess, se) = paired_excess(a.0, arms[best].0);
+            excess <= se
         })
         .collect();
     let kept = if one_se_rule {

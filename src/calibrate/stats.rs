@@ -11,6 +11,14 @@ pub fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len() as f64
 }
 
+/// The mean of the paired differences `a − b` and its standard error (sample sd over √n; 0 for fewer than 2 pairs):
+/// how much worse `a` is than `b` over the same units (runs), and how sure that is.
+pub fn paired_excess(a: &[f64], b: &[f64]) -> (f64, f64) {
+    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+    let se = if d.len() > 1 { sample_sd(&d) / (d.len() as f64).sqrt() } else { 0.0 };
+    (mean(&d), se)
+}
+
 /// Sample standard deviation (n − 1 in the denominator; 0 for fewer than 2 values).
 pub fn sample_sd(v: &[f64]) -> f64 {
     if v.len() < 2 {
