@@ -88,14 +88,14 @@ impl Profile {
 }
 
 /// The profile of `scores[k][j]`, the score of run j at grid value `values[k]` (ascending; values that could not be
-/// simulated hold NaN scores and are left out); none if no value has scores.
+/// simulated hold NaN scores and are left out); none if no value has scores or there are no runs.
 pub fn profile(values: &[f64], scores: &[Vec<f64>]) -> Option<Profile> {
     let ok: Vec<usize> = (0..values.len()).filter(|&k| scores[k].iter().all(|v| v.is_finite())).collect();
     let score_m: Vec<f64> = ok.iter().map(|&k| mean(&scores[k])).collect();
     let best = (0..ok.len()).min_by(|&a, &b| score_m[a].total_cmp(&score_m[b]))?;
     let (excess_m, excess_se_m): (Vec<f64>, Vec<f64>) =
         ok.iter().map(|&k| paired_excess(&scores[k], &scores[ok[best]])).unzip();
-    // The best value always qualifies (excess 0), so the list is never empty; the values ascend.
+    // The best value qualifies (excess 0) whenever there are runs; the values ascend.
     let as_good: Vec<f64> =
         (0..ok.len()).filter(|&i| excess_m[i] <= 2.0 * excess_se_m[i]).map(|i| values[ok[i]]).collect();
     Some(Profile {
@@ -103,7 +103,7 @@ pub fn profile(values: &[f64], scores: &[Vec<f64>]) -> Option<Profile> {
         score_m,
         excess_m,
         excess_se_m,
-        as_good: [as_good[0], as_good[as_good.len() - 1]],
+        as_good: [*as_good.first()?, *as_good.last()?],
     })
 }
 
