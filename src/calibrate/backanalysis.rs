@@ -210,6 +210,7 @@ mod tests {
         let one = super::Profile { as_good: [0.5, 0.5], ..p };
         assert_eq!(one.describe(), "only 0.500 of 3 values across 0.000-1.000");
         assert!(profile(&values, &vec![vec![f64::NAN]; 4]).is_none());
+        assert!(profile(&values, &vec![Vec::new(); 4]).is_none(), "no runs");
     }
 
     #[test]
