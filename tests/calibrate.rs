@@ -145,6 +145,39 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
     assert!(c.report.effects_added.is_empty(), "{:?}", c.report.effects_added);
 }
 
+/// A free spread between rocks has no per-run value but a profile: the runs' CRPS tells a spread six times the
+/// truth from it.
+#[test]
+fn a_free_spread_gets_a_profile_that_holds_its_truth() {
+    let model =
+        synthetic_2d(&Synthetic2d { seed: 4, runs_per_group: 6, ..Default::default() }, Options2d::default()).unwrap();
+    let mut cfg = config_2d();
+    cfg.materials.get_mut("ground").unwrap().insert("rn_sd".into(), ParamSetting::Range([0.0, 0.24]));
+    cfg.effects.max_rounds = 0;
+    let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+    let dir = tempfile::tempdir().unwrap();
+    let c = calibrate(&model, &cfg, &cal, &hold, "seeded", Some(dir.path()), &quiet).unwrap();
+    assert!(c.report.back_analysis.iter().all(|r| r.parameter != "rn_sd"), "a spread has no per-run value");
+    let [sp] = &c.report.spread_profiles[..] else { panic!("{:?}", c.report.spread_profiles) };
+    assert_eq!((sp.material.as_str(), sp.parameter.as_str()), ("ground", "rn_sd"));
+    let p = sp.profile.as_ref().unwrap();
+    let step = p.values[1] - p.values[0];
+    assert!(p.as_good[0] - step < TRUE_2D[1] && TRUE_2D[1] < p.as_good[1] + step, "{p:?}");
+    assert!(p.as_good[1] < 0.24, "the widest spread is told from the truth: {p:?}");
+    assert!(c.report.open_parameters().is_empty(), "{:?}", c.report.open_parameters());
+    // Across bounds a fifth as wide around the truth, the runs cannot tell its values apart: it is left open.
+    cfg.materials.get_mut("ground").unwrap().insert("rn_sd".into(), ParamSetting::Range([0.03, 0.05]));
+    let c = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap();
+    assert_eq!(c.report.open_parameters(), ["ground.rn_sd"], "{:?}", c.report.spread_profiles);
+    let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
+    assert!(md.contains("Spreads between rocks have no per-run value") && md.contains("| ground | rn_sd |"), "{md}");
+    // Each profile as a chart, shown in report.md.
+    for name in ["rn_mean", "rt_mean", "friction_angle_deg", "rn_sd"] {
+        let chart = format!("profile_ground.{name}.svg");
+        assert!(dir.path().join(&chart).is_file() && md.contains(&format!("]({chart})")), "{chart}");
+    }
+}
+
 #[test]
 fn several_searches_or_start_points_keep_the_one_best_on_fresh_numbers() {
     let model =

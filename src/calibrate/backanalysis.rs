@@ -15,9 +15,15 @@
 //! runs, on common random numbers) are ones the calibration runs cannot tell from the best: the profile's
 //! `as_good` range. A range spanning the bounds says the data leave that parameter open, whatever value the
 //! population fit reports; the fit's own value is not compared, as it was chosen on these random numbers and would
-//! look better than it is. On 3DRB a change of Cr of 10⁻⁴ already decorrelates part of the simulated paths (a
+//! look better than it is. The band is conditional on the other parameters at the population fit (not a profile
+//! that fits them again at each value, which would cost a population fit per grid value): where parameters trade
+//! off, the runs leave more open jointly than the bands say. On 3DRB a change of Cr of 10⁻⁴ already decorrelates part of the simulated paths (a
 //! rigid body's bounces are chaotic), so the population fit's last steps there follow noise: docs/calibration.md,
 //! "How sharply the runs pin the parameters".
+//!
+//! A spread between rocks (`cr_sd`, `dynamic_friction_sd_deg`, `rn_sd`, …) has no per-run value (one run-out does
+//! not measure a spread), but it gets the same profile (ours): the runs' scores are CRPS, which a spread too wide or
+//! too narrow raises, so its `as_good` range says how far the runs pin the spread as well.
 
 use super::fit::Context;
 use super::objective::run_score;
@@ -57,6 +63,28 @@ pub struct BackAnalysisRow {
     pub profile: Option<Profile>,
 }
 
+/// The profile of a spread between rocks, which has no per-run value (see the module notes).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SpreadProfile {
+    /// Material (or zone).
+    pub material: String,
+    /// Parameter.
+    pub parameter: String,
+    /// Population fit value.
+    pub population: f64,
+    /// The campaign's score along the grid; none where no grid value could be simulated.
+    pub profile: Option<Profile>,
+}
+
+/// The per-run rows of the location parameters and the profiles of the spreads.
+#[derive(Debug, Clone, Default)]
+pub struct BackAnalysis {
+    /// One row per location parameter.
+    pub rows: Vec<BackAnalysisRow>,
+    /// One profile per spread between rocks.
+    pub spreads: Vec<SpreadProfile>,
+}
+
 /// The calibration runs' mean score along a parameter's grid, the others at the population fit.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Profile {
@@ -74,13 +102,18 @@ pub struct Profile {
 }
 
 impl Profile {
+    /// Does the band span every grid value (the runs leave the parameter open)?
+    pub fn is_open(&self) -> bool {
+        self.as_good[0] <= self.values[0] && self.as_good[1] >= self.values[self.values.len() - 1]
+    }
+
     /// The values as good as the best, in words: "0.300 to 0.550 of 7 values across 0.050-0.800", "only 0.300 of
     /// …", "all 7 values across …: the runs leave it open".
     pub fn describe(&self) -> String {
         let (lo, hi, n) = (self.values[0], self.values[self.values.len() - 1], self.values.len());
         let across = format!("{n} values across {lo:.3}-{hi:.3}");
         match self.as_good {
-            [a, b] if a <= lo && b >= hi => format!("all {across}: the runs leave it open"),
+            _ if self.is_open() => format!("all {across}: the runs leave it open"),
             [a, b] if a == b => format!("only {a:.3} of {across}"),
             [a, b] => format!("{a:.3} to {b:.3} of {across}"),
         }
@@ -113,14 +146,16 @@ pub fn is_location(name: &str) -> bool {
     !(name.ends_with("_sd") || name.ends_with("friction_sd_deg"))
 }
 
-/// Back-analyses every free location parameter of `base` on runs `which`.
-pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: &[usize]) -> Vec<BackAnalysisRow> {
+/// Back-analyses every free location parameter of `base` on runs `which` and profiles every free spread.
+pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: &[usize]) -> BackAnalysis {
     let runs = ctx.model.runs();
     let g = ctx.cfg.back_analysis.grid_points;
-    let mut rows = Vec::new();
-    for p in free.iter().filter(|p| is_location(&p.name) && p.name.contains('.')) {
+    let repeats = ctx.cfg.back_analysis.repeats.unwrap_or(ctx.cfg.search_repeats);
+    let mut out = BackAnalysis::default();
+    for p in free.iter().filter(|p| p.name.contains('.')) {
         let (material, parameter) = p.name.split_once('.').unwrap_or(("", &p.name));
-        (ctx.log)(&format!("back-analysis of {}", p.name));
+        let location = is_location(&p.name);
+        (ctx.log)(&format!("{} of {}", if location { "back-analysis" } else { "profile" }, p.name));
         let grid: Vec<f64> = (0..g).map(|k| p.min + (p.max - p.min) * k as f64 / (g - 1) as f64).collect();
         // medians[k][j], scores[k][j]: median run-out and score of run which[j] at grid value k.
         let (mut medians, mut scores) = (Vec::with_capacity(g), Vec::with_capacity(g));
@@ -128,7 +163,7 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
             let mut c = base.clone();
             c.params.set(p.name.clone(), v);
             super::params::normalize(&mut c.params);
-            let (m, sc) = match ctx.sims(&c, which, ctx.cfg.search_repeats) {
+            let (m, sc) = match ctx.sims(&c, which, repeats) {
                 Ok(s) => (
                     s.iter().map(|r| r.median_runout()).collect(),
                     s.iter().map(|r| run_score(ctx.cfg, &runs[r.run], r)).collect(),
@@ -139,6 +174,23 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
             scores.push(sc);
         }
         let population = base.params.get_or(&p.name, f64::NAN);
+        let profile = profile(&grid, &scores);
+        if let Some(pr) = &profile {
+            (ctx.log)(&format!(
+                "{}: the calibration runs' mean score is as good as the best at {}",
+                p.name,
+                pr.describe()
+            ));
+        }
+        if !location {
+            out.spreads.push(SpreadProfile {
+                material: material.to_string(),
+                parameter: parameter.to_string(),
+                population,
+                profile,
+            });
+            continue;
+        }
         let mut values = Vec::new();
         let mut by_block: BTreeMap<String, Vec<f64>> = BTreeMap::new();
         let mut censored = 0;
@@ -164,16 +216,8 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
                 None => censored += 1,
             }
         }
-        let profile = profile(&grid, &scores);
-        if let Some(pr) = &profile {
-            (ctx.log)(&format!(
-                "{}: the calibration runs' mean score is as good as the best at {}",
-                p.name,
-                pr.describe()
-            ));
-        }
         let spread = |v: &[f64]| Spread { mean: mean(v), sd: sample_sd(v), n: v.len() };
-        rows.push(BackAnalysisRow {
+        out.rows.push(BackAnalysisRow {
             material: material.to_string(),
             parameter: parameter.to_string(),
             population,
@@ -183,7 +227,7 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
             profile,
         });
     }
-    rows
+    out
 }
 
 #[cfg(test)]

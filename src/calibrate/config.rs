@@ -37,6 +37,11 @@
 //! restart_arms = false     # each arm also tries its effect from the start point of the materials
 //! refit_check = false      # a fold's refit counts only if it beats its start on fresh repeats
 //! # fit_arms = true         # each effect arm also fitted again per inner fold (default: 2DLM yes, 3DRB no)
+//!
+//! [back_analysis]
+//! enabled = true            # per-run values and each parameter's band of values as good as the best
+//! grid_points = 7           # values across each parameter's bounds
+//! # repeats = 20            # simulations per run at each value (default: search_repeats)
 //! ```
 
 use super::effects::{by_name, effects_for};
@@ -370,11 +375,14 @@ pub struct BackAnalysisConfig {
     pub enabled: bool,
     /// Values tried across each parameter's bounds (default 7).
     pub grid_points: usize,
+    /// Simulations of each run at each grid value (default: `search_repeats`). More sharpen the per-run values and
+    /// the profiles' bands (their standard errors fall as one over the square root), at proportional cost.
+    pub repeats: Option<usize>,
 }
 
 impl Default for BackAnalysisConfig {
     fn default() -> Self {
-        BackAnalysisConfig { enabled: true, grid_points: 7 }
+        BackAnalysisConfig { enabled: true, grid_points: 7, repeats: None }
     }
 }
 
@@ -787,6 +795,13 @@ impl CalibrationConfig {
                 "use 7",
             ));
         }
+        if let Some(r) = self.back_analysis.repeats.filter(|r| !(1..=MAX_REPEATS).contains(r)) {
+            return Err(Error::invalid(
+                f("back_analysis.repeats"),
+                format!("must be in [1, {MAX_REPEATS}], got {r}"),
+                format!("leave it out for search_repeats ({}), or give 20", self.search_repeats),
+            ));
+        }
         for (m, params) in &self.materials {
             for (p, s) in params {
                 check_setting(&f(&format!("materials.{m}.{p}")), s)?;
@@ -1046,6 +1061,8 @@ mod tests {
             .to_string();
         assert!(e.contains("c.toml: screen_points") && e.contains("got 2"), "{e}");
         assert!(CalibrationConfig::from_toml_str("start_points = 4\nscreen_points = 3\n", "c.toml").is_ok());
+        let e = CalibrationConfig::from_toml_str("[back_analysis]\nrepeats = 0\n", "c.toml").unwrap_err().to_string();
+        assert!(e.contains("c.toml: back_analysis.repeats") && e.contains("got 0"), "{e}");
         let e = CalibrationConfig::from_toml_str("release_attempts = 0\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: release_attempts") && e.contains("got 0"), "{e}");
         let e = CalibrationConfig::from_toml_str("rest_noise_m = -0.5\n", "c.toml").unwrap_err().to_string();

@@ -225,8 +225,11 @@ pub fn calibrate(
     log(&format!("population fit of {} free parameters on {} runs", free.len(), cal.len()));
     let (baseline, search, searches) = fit::fit_population(&ctx, &start, &free, cal, "population fit");
     let t_fit = t0.elapsed().as_secs_f64();
-    let back =
-        if cfg.back_analysis.enabled { backanalysis::back_analyse(&ctx, &baseline, &free, cal) } else { Vec::new() };
+    let back = if cfg.back_analysis.enabled {
+        backanalysis::back_analyse(&ctx, &baseline, &free, cal)
+    } else {
+        Default::default()
+    };
     let t_back = t0.elapsed().as_secs_f64();
     let lp = effects_loop::effects_loop(&ctx, &baseline, &free, cal)?;
     let t_loop = t0.elapsed().as_secs_f64();
@@ -343,7 +346,8 @@ pub fn calibrate(
         track_scatter_m: track_scatter,
         bounces,
         measured_from_tracks: measured,
-        back_analysis: back,
+        back_analysis: back.rows,
+        spread_profiles: back.spreads,
         population_fit: serde_json::json!({
             "objective": cfg.objective,
             "objective_m": search.f,

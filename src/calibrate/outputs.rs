@@ -33,6 +33,7 @@ fn is_output_file(name: &str) -> bool {
         || named("residual_vs_", &[".svg"])
         || named("bounce_ranks_vs_", &[".svg"])
         || named("runout_", &[".svg"])
+        || named("profile_", &[".svg"])
         || named("residual_map", &[".svg", ".tif", ".png"])
 }
 
@@ -111,7 +112,14 @@ mod tests {
 
     #[test]
     fn only_a_calibrations_own_names_count() {
-        for name in ["report.json", "runs.csv", "residual_vs_mass_kg.svg", "residual_map_final.tif", "cv_repeats.md"] {
+        for name in [
+            "report.json",
+            "runs.csv",
+            "residual_vs_mass_kg.svg",
+            "profile_default.cr_sd.svg",
+            "residual_map_final.tif",
+            "cv_repeats.md",
+        ] {
             assert!(is_output_file(name), "{name}");
         }
         for name in ["notes.md", "terrain.asc", "residual_vs_mass_kg.txt", "my_runout.csv"] {

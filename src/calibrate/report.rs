@@ -1,7 +1,7 @@
 //! The calibration report: `report.json` (machine-readable, the keys of issue 5 and more), `report.md` (for a
 //! person), SVG charts and the residual maps (GeoTIFF and PNG).
 
-use super::backanalysis::BackAnalysisRow;
+use super::backanalysis::{BackAnalysisRow, Profile, SpreadProfile};
 use super::config::CalibrationConfig;
 use super::diagnose::{covariates, residuals, Diagnostic};
 use super::effects_loop::{AddedEffect, EffectTrial};
@@ -139,12 +139,30 @@ pub struct Report {
     pub measured_from_tracks: Vec<super::measured::Measured>,
     /// Per-run back-analysis (mean ± sd per material).
     pub back_analysis: Vec<BackAnalysisRow>,
+    /// The profile of each free spread between rocks (no per-run value; [`super::backanalysis`]).
+    #[serde(default)]
+    pub spread_profiles: Vec<SpreadProfile>,
     /// Objective evaluations of the population fit and its final value.
     pub population_fit: serde_json::Value,
     /// Time.
     pub timing: Timing,
     /// The settings used.
     pub settings: CalibrationConfig,
+}
+
+impl Report {
+    /// Each back-analysed parameter and spread that has a profile: (`material.parameter`, population fit, profile).
+    pub fn profiles(&self) -> impl Iterator<Item = (String, f64, &Profile)> {
+        let rows = self.back_analysis.iter().map(|r| (&r.material, &r.parameter, r.population, &r.profile));
+        let spreads = self.spread_profiles.iter().map(|s| (&s.material, &s.parameter, s.population, &s.profile));
+        rows.chain(spreads).filter_map(|(m, p, fit, pr)| Some((format!("{m}.{p}"), fit, pr.as_ref()?)))
+    }
+
+    /// The back-analysed parameters and spreads whose every grid value is as good as the best (`material.parameter`):
+    /// the calibration runs leave them open.
+    pub fn open_parameters(&self) -> Vec<String> {
+        self.profiles().filter(|(_, _, p)| p.is_open()).map(|(name, _, _)| name).collect()
+    }
 }
 
 /// The zone check of the baseline on the calibration runs ([`super::zone`]).
@@ -316,6 +334,37 @@ pub fn write_report(
             ));
         }
     }
+    // How sharply the runs pin each back-analysed parameter and spread.
+    for (name, fit, p) in report.profiles() {
+        let mut series = Series::new(
+            "mean score less the lowest",
+            p.values.iter().copied().zip(p.excess_m.iter().copied()).collect(),
+            SeriesStyle::LineMarkers,
+            CATEGORICAL[0],
+        );
+        series.error_bars =
+            Some(p.excess_m.iter().zip(&p.excess_se_m).map(|(e, se)| (e - 2.0 * se, e + 2.0 * se)).collect());
+        let chart = Chart {
+            title: format!("How sharply the calibration runs pin {name}"),
+            x_label: name.clone(),
+            y_label: "mean score less the lowest (m), ± 2 paired SE".into(),
+            series: vec![series],
+            hlines: vec![(0.0, String::new())],
+            vlines: [(fit, "population fit".into())].into_iter().filter(|(x, _)| x.is_finite()).collect(),
+            ..Default::default()
+        };
+        let file = profile_chart(&name);
+        write_svg(&dir.join(&file), &chart)?;
+        figures.push((
+            file,
+            format!(
+                "The calibration runs' mean score (run-out CRPS plus what a track adds) along the grid of {name}, the \
+                 others at the population fit, less the lowest, with two paired standard errors: a value whose bar \
+                 reaches 0 is as good as the best ({}).",
+                p.describe()
+            ),
+        ));
+    }
     // Residual maps.
     let frame = model.map_frame();
     let zones: Vec<&Region> = report.effects_added.iter().filter_map(|e| e.region.as_ref()).collect();
@@ -408,6 +457,14 @@ fn baseline_and_final(title: String, x_label: &str, y_label: &str, points: [Vec<
         hlines: vec![(right, String::new())],
         ..Default::default()
     }
+}
+
+/// The file of the chart of the profile of `name` (`material.parameter`; a character other than a letter, digit,
+/// `.`, `_` or `-` in a material's name becomes `_`).
+fn profile_chart(name: &str) -> String {
+    let safe: String =
+        name.chars().map(|c| if c.is_ascii_alphanumeric() || "._-".contains(c) { c } else { '_' }).collect();
+    format!("profile_{safe}.svg")
 }
 
 /// The file of the chart of run-out residual against `covariate`.
@@ -730,10 +787,10 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             }
         }
     }
-    let band = if r.back_analysis.is_empty() {
+    let band = if r.back_analysis.is_empty() && r.spread_profiles.is_empty() {
         ""
     } else {
-        "; which values the calibration runs cannot tell from the best: the last column of the back-analysis table below"
+        "; which values the calibration runs cannot tell from the best: the last column of the back-analysis tables below"
     };
     let _ = writeln!(
         s,
@@ -799,9 +856,11 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
             );
         }
     }
-    if !r.back_analysis.is_empty() {
+    if !r.back_analysis.is_empty() || !r.spread_profiles.is_empty() {
         let _ = writeln!(s, "\n## Per-run back-analysis (mean ± sd over calibration runs)\n");
-        let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds. As good as the best: the values of the grid (across the bounds) at which the calibration runs' mean score is within two standard errors of the lowest (paired over the runs): where this spans the bounds, the runs leave the parameter open whatever the fit reports (docs/calibration.md, \"How sharply the runs pin the parameters\").\n");
+    }
+    if !r.back_analysis.is_empty() {
+        let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds. As good as the best: the values of the grid (across the bounds) at which the calibration runs' mean score is within two standard errors of the lowest (paired over the runs): where this spans the bounds, the runs leave the parameter open whatever the fit reports (docs/calibration.md, \"How sharply the runs pin the parameters\"). Each band holds the other parameters at the population fit: where two trade off (Cr against friction, say), the runs leave more open jointly than the two bands say; the spread of the fitted values over `--kfold` folds shows that.\n");
         let _ = writeln!(s, "| material | parameter | population fit | mean ± sd (n) | censored | per block | as good as the best (grid) |");
         let _ = writeln!(s, "|---|---|---|---|---|---|---|");
         for row in &r.back_analysis {
@@ -820,6 +879,15 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
                 row.censored,
                 blocks.join("; ")
             );
+        }
+    }
+    if !r.spread_profiles.is_empty() {
+        let _ = writeln!(s, "\nSpreads between rocks have no per-run value, but the same grid tells how far the runs pin them (their scores are CRPS, which a spread too wide or too narrow raises):\n");
+        let _ = writeln!(s, "| material | parameter | population fit | as good as the best (grid) |");
+        let _ = writeln!(s, "|---|---|---|---|");
+        for sp in &r.spread_profiles {
+            let good = sp.profile.as_ref().map_or("–".to_string(), |p| p.describe());
+            let _ = writeln!(s, "| {} | {} | {:.3} | {good} |", sp.material, sp.parameter, sp.population);
         }
     }
     let _ = writeln!(s, "\n## Effects loop\n");

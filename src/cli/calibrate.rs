@@ -193,6 +193,10 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
             r.effects_added.iter().map(with_rivals).collect::<Vec<_>>().join(", ")
         }
     );
+    let open = r.open_parameters();
+    if !open.is_empty() {
+        say!("left open by the calibration runs (every value of its grid as good as the best): {}", open.join(", "));
+    }
     let (set, b, f) = if hold.is_empty() {
         ("calibration (no held-out runs: fitted on these numbers)", &r.baseline.calibration, &r.final_stage.calibration)
     } else {
