@@ -15,9 +15,12 @@
 //! runs, on common random numbers) are ones the calibration runs cannot tell from the best: the profile's
 //! `as_good` range. A range spanning the bounds says the data leave that parameter open, whatever value the
 //! population fit reports; the fit's own value is not compared, as it was chosen on these random numbers and would
-//! look better than it is. The band is conditional on the other parameters at the population fit (not a profile
-//! that fits them again at each value, which would cost a population fit per grid value): where parameters trade
-//! off, the runs leave more open jointly than the bands say. On 3DRB a change of Cr of 10⁻⁴ already decorrelates part of the simulated paths (a
+//! look better than it is. With `[back_analysis] refit_evaluations` above 0 (the 2DLM default, 100) the other free
+//! parameters are fitted again at each grid value (from the population fit, on the same random numbers), so the band
+//! follows their trade-offs, as a profile likelihood does; at 0 (the 3DRB default: a 3DRB evaluation costs seconds,
+//! and the refits would cost a population fit per grid value) they are held at the population fit, and where
+//! parameters trade off the runs leave more open jointly than the bands say. The per-run values are always found with
+//! the others held. On 3DRB a change of Cr of 10⁻⁴ already decorrelates part of the simulated paths (a
 //! rigid body's bounces are chaotic), so the population fit's last steps there follow noise: docs/calibration.md,
 //! "How sharply the runs pin the parameters".
 //!
@@ -31,6 +34,7 @@ use super::params::{Candidate, FreeParam};
 use super::stats::{mean, paired_excess, sample_sd};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::sync::atomic::Ordering;
 
 /// Mean ± sd of a back-analysed parameter.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -99,6 +103,10 @@ pub struct Profile {
     /// The lowest and highest grid values whose excess is within two standard errors: values the runs cannot
     /// tell from the best.
     pub as_good: [f64; 2],
+    /// The evaluations that fitted the other free parameters again at each grid value (0: held at the population
+    /// fit).
+    #[serde(default)]
+    pub others_refit_evaluations: usize,
 }
 
 impl Profile {
@@ -137,7 +145,17 @@ pub fn profile(values: &[f64], scores: &[Vec<f64>]) -> Option<Profile> {
         excess_m,
         excess_se_m,
         as_good: [*as_good.first()?, *as_good.last()?],
+        others_refit_evaluations: 0,
     })
+}
+
+/// `c` with the `others` fitted again on runs `which` within `evaluations` (from their values in `c`, on the
+/// calibration's common random numbers), quietly: the simulations are counted in `ctx`, the progress is not logged.
+fn refit_others(ctx: &Context, c: &Candidate, others: &[FreeParam], which: &[usize], evaluations: usize) -> Candidate {
+    let quiet = Context::new(ctx.model, ctx.cfg, &|_| {});
+    let (fitted, _) = super::fit::fit(&quiet, c, others, which, evaluations, "", ctx.cfg.seed);
+    ctx.simulations.fetch_add(quiet.simulations.load(Ordering::Relaxed), Ordering::Relaxed);
+    fitted
 }
 
 /// Is this a parameter the per-run back-analysis fits (locations, not spreads between rocks such as `cr_sd` or
@@ -151,11 +169,22 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
     let runs = ctx.model.runs();
     let g = ctx.cfg.back_analysis.grid_points;
     let repeats = ctx.cfg.back_analysis.repeats.unwrap_or(ctx.cfg.search_repeats);
+    let refit = ctx.cfg.profile_refit_evaluations(ctx.model.kind());
     let mut out = BackAnalysis::default();
     for p in free.iter().filter(|p| p.name.contains('.')) {
         let (material, parameter) = p.name.split_once('.').unwrap_or(("", &p.name));
         let location = is_location(&p.name);
-        (ctx.log)(&format!("{} of {}", if location { "back-analysis" } else { "profile" }, p.name));
+        let others: Vec<FreeParam> = free.iter().filter(|q| q.name != p.name).cloned().collect();
+        let refitted = if others.is_empty() { 0 } else { refit };
+        let what = if location { "back-analysis" } else { "profile" };
+        let how = if refitted == 0 {
+            String::new()
+        } else {
+            // At most: the held simulations, the refit's evaluations and its best candidate's, at each value.
+            let sims = g * which.len() * (repeats * 2 + refitted * ctx.cfg.search_repeats);
+            format!(", the others fitted again at each value{}", ctx.time_for(sims))
+        };
+        (ctx.log)(&format!("{what} of {}{how}", p.name));
         let grid: Vec<f64> = (0..g).map(|k| p.min + (p.max - p.min) * k as f64 / (g - 1) as f64).collect();
         // medians[k][j], scores[k][j]: median run-out and score of run which[j] at grid value k.
         let (mut medians, mut scores) = (Vec::with_capacity(g), Vec::with_capacity(g));
@@ -163,18 +192,25 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
             let mut c = base.clone();
             c.params.set(p.name.clone(), v);
             super::params::normalize(&mut c.params);
-            let (m, sc) = match ctx.sims(&c, which, repeats) {
-                Ok(s) => (
-                    s.iter().map(|r| r.median_runout()).collect(),
-                    s.iter().map(|r| run_score(ctx.cfg, &runs[r.run], r)).collect(),
-                ),
-                Err(_) => (vec![f64::NAN; which.len()], vec![f64::NAN; which.len()]),
+            // The others held: for the per-run values, and for the band unless they are fitted again.
+            let held = (location || refitted == 0).then(|| ctx.sims(&c, which, repeats));
+            if let (true, Some(sims)) = (location, &held) {
+                medians.push(match sims {
+                    Ok(s) => s.iter().map(|r| r.median_runout()).collect(),
+                    Err(_) => vec![f64::NAN; which.len()],
+                });
+            }
+            let scored = match held {
+                Some(sims) if refitted == 0 => sims,
+                _ => ctx.sims(&refit_others(ctx, &c, &others, which, refitted), which, repeats),
             };
-            medians.push(m);
-            scores.push(sc);
+            scores.push(match scored {
+                Ok(s) => s.iter().map(|r| run_score(ctx.cfg, &runs[r.run], r)).collect(),
+                Err(_) => vec![f64::NAN; which.len()],
+            });
         }
         let population = base.params.get_or(&p.name, f64::NAN);
-        let profile = profile(&grid, &scores);
+        let profile = profile(&grid, &scores).map(|pr| Profile { others_refit_evaluations: refitted, ..pr });
         if let Some(pr) = &profile {
             (ctx.log)(&format!(
                 "{}: the calibration runs' mean score is as good as the best at {}",

@@ -42,6 +42,7 @@
 //! enabled = true            # per-run values and each parameter's band of values as good as the best
 //! grid_points = 7           # values across each parameter's bounds
 //! # repeats = 20            # simulations per run at each value (default: search_repeats)
+//! # refit_evaluations = 100 # the others fitted again at each value of a band (default: 2DLM 100, 3DRB 0: held)
 //! ```
 
 use super::effects::{by_name, effects_for};
@@ -378,11 +379,15 @@ pub struct BackAnalysisConfig {
     /// Simulations of each run at each grid value (default: `search_repeats`). More sharpen the per-run values and
     /// the profiles' bands (their standard errors fall as one over the square root), at proportional cost.
     pub repeats: Option<usize>,
+    /// Objective evaluations that fit the other free parameters again at each grid value of a profile, so that its
+    /// band follows their trade-offs (default: 2DLM 100, 3DRB 0, off: a 3DRB evaluation costs seconds); 0 holds
+    /// them at the population fit.
+    pub refit_evaluations: Option<usize>,
 }
 
 impl Default for BackAnalysisConfig {
     fn default() -> Self {
-        BackAnalysisConfig { enabled: true, grid_points: 7, repeats: None }
+        BackAnalysisConfig { enabled: true, grid_points: 7, repeats: None, refit_evaluations: None }
     }
 }
 
@@ -553,6 +558,12 @@ impl CalibrationConfig {
     /// Most objective evaluations of each fold's refit in the confirming cross-validation, for `model`.
     pub fn cv_refit_evaluations(&self, model: ModelKind) -> usize {
         self.effects.cv_refit_evaluations.unwrap_or(default_evaluations(model).2)
+    }
+
+    /// The evaluations that fit the others again at each profile value ([`BackAnalysisConfig::refit_evaluations`]),
+    /// for `model`.
+    pub fn profile_refit_evaluations(&self, model: ModelKind) -> usize {
+        self.back_analysis.refit_evaluations.unwrap_or(if model == ModelKind::Lumped2d { 100 } else { 0 })
     }
 
     /// Whether each effect arm is also fitted again ([`EffectsConfig::fit_arms`]), for `model`.
@@ -793,6 +804,13 @@ impl CalibrationConfig {
                 f("back_analysis.grid_points"),
                 format!("must be in [3, {MAX_GRID_POINTS}]"),
                 "use 7",
+            ));
+        }
+        if let Some(n) = self.back_analysis.refit_evaluations.filter(|&n| n > MAX_EVALUATIONS) {
+            return Err(Error::invalid(
+                f("back_analysis.refit_evaluations"),
+                format!("{n} is more than the limit of {MAX_EVALUATIONS}"),
+                "use 0 (the others held at the population fit) to 100",
             ));
         }
         if let Some(r) = self.back_analysis.repeats.filter(|r| !(1..=MAX_REPEATS).contains(r)) {
@@ -1063,6 +1081,15 @@ mod tests {
         assert!(CalibrationConfig::from_toml_str("start_points = 4\nscreen_points = 3\n", "c.toml").is_ok());
         let e = CalibrationConfig::from_toml_str("[back_analysis]\nrepeats = 0\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: back_analysis.repeats") && e.contains("got 0"), "{e}");
+        let e = CalibrationConfig::from_toml_str("[back_analysis]\nrefit_evaluations = 100001\n", "c.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("c.toml: back_analysis.refit_evaluations") && e.contains("100001"), "{e}");
+        let d = CalibrationConfig::default();
+        assert_eq!(
+            (d.profile_refit_evaluations(ModelKind::Lumped2d), d.profile_refit_evaluations(ModelKind::Rigid3d)),
+            (100, 0)
+        );
         let e = CalibrationConfig::from_toml_str("release_attempts = 0\n", "c.toml").unwrap_err().to_string();
         assert!(e.contains("c.toml: release_attempts") && e.contains("got 0"), "{e}");
         let e = CalibrationConfig::from_toml_str("rest_noise_m = -0.5\n", "c.toml").unwrap_err().to_string();

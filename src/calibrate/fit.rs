@@ -98,13 +98,17 @@ impl<'a> Context<'a> {
     }
 }
 
-/// How long `n` simulations take at the pace of `done` in `secs` (empty below 100 done: no pace yet).
+/// How long `n` simulations take at the pace of `done` in `secs` (empty below 100 done: no pace yet; and below a
+/// second, not worth saying).
 fn time_at_pace(n: usize, done: usize, secs: f64) -> String {
     if done < 100 || secs <= 0.0 {
         return String::new();
     }
     let pace = done as f64 / secs;
     let t = n as f64 / pace;
+    if t < 1.0 {
+        return String::new();
+    }
     let when = if t < 90.0 { format!("{t:.0} s") } else { format!("{:.0} min", t / 60.0) };
     format!(", about {when} at the pace so far ({pace:.0} simulations/s)")
 }
@@ -306,6 +310,7 @@ mod tests {
     fn the_time_left_is_read_off_the_pace_so_far() {
         assert_eq!(time_at_pace(5000, 99, 1.0), "");
         assert_eq!(time_at_pace(5000, 1000, 0.0), "");
+        assert_eq!(time_at_pace(100, 1000, 0.5), "", "under a second");
         assert_eq!(time_at_pace(6000, 1500, 10.0), ", about 40 s at the pace so far (150 simulations/s)");
         assert_eq!(time_at_pace(61_440, 15_000, 100.0), ", about 7 min at the pace so far (150 simulations/s)");
     }

@@ -860,7 +860,14 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         let _ = writeln!(s, "\n## Per-run back-analysis (mean ± sd over calibration runs)\n");
     }
     if !r.back_analysis.is_empty() {
-        let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds. As good as the best: the values of the grid (across the bounds) at which the calibration runs' mean score is within two standard errors of the lowest (paired over the runs): where this spans the bounds, the runs leave the parameter open whatever the fit reports (docs/calibration.md, \"How sharply the runs pin the parameters\"). Each band holds the other parameters at the population fit: where two trade off (Cr against friction, say), the runs leave more open jointly than the two bands say; the spread of the fitted values over `--kfold` folds shows that.\n");
+        let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds. As good as the best: the values of the grid (across the bounds) at which the calibration runs' mean score is within two standard errors of the lowest (paired over the runs): where this spans the bounds, the runs leave the parameter open whatever the fit reports (docs/calibration.md, \"How sharply the runs pin the parameters\").\n");
+        let refit = r.profiles().map(|(_, _, p)| p.others_refit_evaluations).max().unwrap_or(0);
+        let others = if refit > 0 {
+            format!("At each value of a band the other free parameters were fitted again ({refit} evaluations), so the band follows their trade-offs.")
+        } else {
+            "Each band holds the other parameters at the population fit: where two trade off (Cr against friction, say), the runs leave more open jointly than the two bands say (`[back_analysis] refit_evaluations` fits them again at each value).".to_string()
+        };
+        let _ = writeln!(s, "{others}\n");
         let _ = writeln!(s, "| material | parameter | population fit | mean ± sd (n) | censored | per block | as good as the best (grid) |");
         let _ = writeln!(s, "|---|---|---|---|---|---|---|");
         for row in &r.back_analysis {
