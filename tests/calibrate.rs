@@ -190,6 +190,9 @@ fn a_free_spread_gets_a_profile_that_holds_its_truth() {
     assert!(open(&c), "{:?}", c.report.spread_profiles);
     let md = std::fs::read_to_string(dir.path().join("report.md")).unwrap();
     assert!(md.contains("Spreads between rocks have no per-run value") && md.contains("| ground | rn_sd |"), "{md}");
+    // The 2DLM bands fit the others again at each value, and report.md says so under the table and in each caption.
+    assert!(md.contains("the other free parameters were fitted again (100 evaluations)"), "{md}");
+    assert!(md.matches("the others fitted again at each value").count() >= 4, "{md}");
     // Each profile as a chart, shown in report.md.
     for name in ["rn_mean", "rt_mean", "friction_angle_deg", "rn_sd"] {
         let chart = format!("profile_ground.{name}.svg");

@@ -89,7 +89,8 @@ pub struct BackAnalysis {
     pub spreads: Vec<SpreadProfile>,
 }
 
-/// The calibration runs' mean score along a parameter's grid, the others at the population fit.
+/// The calibration runs' mean score along a parameter's grid, the others at the population fit or fitted again
+/// at each value (`others_refit_evaluations`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Profile {
     /// The grid values.

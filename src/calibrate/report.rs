@@ -355,12 +355,14 @@ pub fn write_report(
         };
         let file = profile_chart(&name);
         write_svg(&dir.join(&file), &chart)?;
+        let others =
+            if p.others_refit_evaluations > 0 { "fitted again at each value" } else { "at the population fit" };
         figures.push((
             file,
             format!(
                 "The calibration runs' mean score (run-out CRPS plus what a track adds) along the grid of {name}, the \
-                 others at the population fit, less the lowest, with two paired standard errors: a value whose bar \
-                 reaches 0 is as good as the best ({}).",
+                 others {others}, less the lowest, with two paired standard errors: a value whose bar reaches 0 is as \
+                 good as the best ({}).",
                 p.describe()
             ),
         ));
