@@ -130,8 +130,9 @@ impl Profile {
 }
 
 /// The profile of `scores[k][j]`, the score of run j at grid value `values[k]` (ascending; values that could not be
-/// simulated hold NaN scores and are left out); none if no value has scores or there are no runs.
-pub fn profile(values: &[f64], scores: &[Vec<f64>]) -> Option<Profile> {
+/// simulated hold NaN scores and are left out), the others fitted again with `refit_evaluations` at each value (0:
+/// held); none if no value has scores or there are no runs.
+pub fn profile(values: &[f64], scores: &[Vec<f64>], refit_evaluations: usize) -> Option<Profile> {
     let ok: Vec<usize> = (0..values.len()).filter(|&k| scores[k].iter().all(|v| v.is_finite())).collect();
     let score_m: Vec<f64> = ok.iter().map(|&k| mean(&scores[k])).collect();
     let best = (0..ok.len()).min_by(|&a, &b| score_m[a].total_cmp(&score_m[b]))?;
@@ -146,7 +147,7 @@ pub fn profile(values: &[f64], scores: &[Vec<f64>]) -> Option<Profile> {
         excess_m,
         excess_se_m,
         as_good: [*as_good.first()?, *as_good.last()?],
-        others_refit_evaluations: 0,
+        others_refit_evaluations: refit_evaluations,
     })
 }
 
@@ -211,7 +212,7 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
             });
         }
         let population = base.params.get_or(&p.name, f64::NAN);
-        let profile = profile(&grid, &scores).map(|pr| Profile { others_refit_evaluations: refitted, ..pr });
+        let profile = profile(&grid, &scores, refitted);
         if let Some(pr) = &profile {
             (ctx.log)(&format!(
                 "{}: the calibration runs' mean score is as good as the best at {}",
@@ -278,7 +279,7 @@ mod tests {
         // average by 0.1 but within its spread (differences 0.9, −0.5, −0.1: mean 0.1, se 0.41); 1.5 could not be
         // simulated.
         let scores = vec![vec![3.0, 4.0, 5.0], vec![2.0, 3.0, 4.0], vec![2.9, 2.5, 3.9], vec![f64::NAN; 3]];
-        let p = profile(&values, &scores).unwrap();
+        let p = profile(&values, &scores, 0).unwrap();
         assert_eq!(p.values, [0.0, 0.5, 1.0]);
         assert_eq!(p.excess_m[1], 0.0);
         assert!((p.excess_m[0] - 1.0).abs() < 1e-12 && p.excess_se_m[0] < 1e-12);
@@ -290,8 +291,8 @@ mod tests {
         assert_eq!(open.describe(), "all 3 values across 0.000-1.000: the runs leave it open");
         let one = super::Profile { as_good: [0.5, 0.5], ..p };
         assert_eq!(one.describe(), "only 0.500 of 3 values across 0.000-1.000");
-        assert!(profile(&values, &vec![vec![f64::NAN]; 4]).is_none());
-        assert!(profile(&values, &vec![Vec::new(); 4]).is_none(), "no runs");
+        assert!(profile(&values, &vec![vec![f64::NAN]; 4], 0).is_none());
+        assert!(profile(&values, &vec![Vec::new(); 4], 0).is_none(), "no runs");
     }
 
     #[test]
