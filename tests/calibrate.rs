@@ -1,6 +1,7 @@
 //! `talus calibrate` on synthetic campaigns made with talus itself (small versions of the study in
 //! `examples/calibration_study.rs`; the figures of the full study are in docs/calibration.md).
 
+use talus::calibrate::backanalysis::BAND_SEED_OFFSET;
 use talus::calibrate::config::{
     BackAnalysisConfig, CalibrationConfig, EffectsConfig, ModelKind, Objective, ParamSetting,
 };
@@ -8,7 +9,10 @@ use talus::calibrate::crossval::fold_assignment;
 use talus::calibrate::fit::{with_unit, SearchRecord};
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
+use talus::calibrate::objective::run_score;
+use talus::calibrate::params::Candidate;
 use talus::calibrate::params::Region;
+use talus::calibrate::stats::mean;
 use talus::calibrate::synthetic::{
     case_2d, case_3d, standard_zone, synthetic_2d, synthetic_3d, truth_2d, zone_overlap, Synthetic2d, Synthetic3d,
     TRUE_2D,
@@ -145,6 +149,9 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
         let p = r.profile.clone().unwrap();
         let step = p.values[1] - p.values[0];
         assert!(p.as_good[0] - step < truth && truth < p.as_good[1] + step, "{} {truth}: {p:?}", r.parameter);
+        // The population fit, scored on the grid's numbers, is as good as the band's best.
+        let (e, se) = (p.population_excess_m.unwrap(), p.population_excess_se_m.unwrap());
+        assert!(e <= 2.0 * se, "{}: the fit {e} ± {se} above the lowest", r.parameter);
         (p.as_good, step)
     };
     let refitted: Vec<([f64; 2], f64)> = rows.iter().zip(truths).map(|(r, t)| band(r, t)).collect();
@@ -160,6 +167,19 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
         assert!(narrow[1] - narrow[0] <= 2.0 * step, "{}: {narrow:?}", r.parameter);
         assert!(narrow[1] - narrow[0] < wide[1] - wide[0], "{} held {narrow:?}, fitted again {wide:?}", r.parameter);
         assert_eq!(r.profile.as_ref().unwrap().others_refit_evaluations, 0);
+    }
+    // The bands are read on streams no fit chose anything on: each held value's score is the baseline's with that
+    // value simulated on the back-analysis's streams; on the population fit's own streams it would differ.
+    let rt = c.report.back_analysis.iter().find(|r| r.parameter == "rt_mean").unwrap().profile.clone().unwrap();
+    let score_at = |v: f64, seed: u64| {
+        let mut at = Candidate { params: c.report.baseline.parameters.clone(), effects: Vec::new() };
+        at.params.set("ground.rt_mean", v);
+        let sims = evaluate(&model, &at, &cal, held.search_repeats, seed, 0).unwrap();
+        mean(&sims.iter().map(|s| run_score(&held, &model.runs()[s.run], s)).collect::<Vec<_>>())
+    };
+    for (&v, &score) in rt.values.iter().zip(&rt.score_m) {
+        assert_eq!(score, score_at(v, held.seed.wrapping_add(BAND_SEED_OFFSET)), "Rt {v}");
+        assert_ne!(score, score_at(v, held.seed), "Rt {v}");
     }
 }
 
@@ -192,6 +212,8 @@ fn a_free_spread_gets_a_profile_that_holds_its_truth() {
     assert!(md.contains("Spreads between rocks have no per-run value") && md.contains("| ground | rn_sd |"), "{md}");
     // The 2DLM bands fit the others again at each value, and report.md says so under the table and in each caption.
     assert!(md.contains("the other free parameters were fitted again (100 evaluations)"), "{md}");
+    assert!(md.contains("simulated on random numbers the fits did not use"), "{md}");
+    assert!(md.contains("m against the lowest (within its band) |"), "the fit against each band, in the tables: {md}");
     assert!(md.matches("the others fitted again at each value").count() >= 4, "{md}");
     // Each profile as a chart, shown in report.md.
     for name in ["rn_mean", "rt_mean", "friction_angle_deg", "rn_sd"] {

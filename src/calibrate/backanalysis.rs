@@ -14,10 +14,9 @@
 //! whose mean score exceeds the lowest one's by no more than two standard errors of the difference (paired over the
 //! runs, on common random numbers) are ones the calibration runs cannot tell from the best: the profile's
 //! `as_good` range. A range spanning the bounds says the data leave that parameter open, whatever value the
-//! population fit reports; the fit's own value is not compared, as it was chosen on these random numbers and would
-//! look better than it is. With `[back_analysis] refit_evaluations` above 0 (the 2DLM default, 100) the other free
-//! parameters are fitted again at each grid value (from the population fit, on the same random numbers), so the band
-//! follows their trade-offs, as a profile likelihood does; at 0 (the 3DRB default: a 3DRB evaluation costs seconds,
+//! population fit reports. With `[back_analysis] refit_evaluations` above 0 (the 2DLM default, 100) the other free
+//! parameters are fitted again at each grid value (from the population fit, on the population fit's random numbers),
+//! so the band follows their trade-offs, as a profile likelihood does; at 0 (the 3DRB default: a 3DRB evaluation costs seconds,
 //! and the refits would cost a population fit per grid value) they are held at the population fit, and where
 //! parameters trade off the runs leave more open jointly than the bands say. The per-run values are always found with
 //! the others held. On 3DRB a change of Cr of 10⁻⁴ already decorrelates part of the simulated paths (a
@@ -27,6 +26,16 @@
 //! A spread between rocks (`cr_sd`, `dynamic_friction_sd_deg`, `rn_sd`, …) has no per-run value (one run-out does
 //! not measure a spread), but it gets the same profile (ours): the runs' scores are CRPS, which a spread too wide or
 //! too narrow raises, so its `as_good` range says how far the runs pin the spread as well.
+//!
+//! **Scored on fresh numbers** (ours, since stop 74): the grid's simulations use streams that neither the population
+//! fit nor a refit chose anything on (common to every grid value, so the differences stay paired). On the fit's own
+//! numbers a value near the fit, or one whose others were refitted on them, looks better than it is by the luck the
+//! fit found there (the winner's curse that the population fit's choice between searches avoids the same way,
+//! `fit.rs`). The population fit is scored on the same numbers, and each profile gives its excess over the lowest
+//! grid value with the paired standard error: within two, the fit is in its own band by the rule that makes the band;
+//! outside, the search stopped short of the valley, its own numbers flattered it, or these numbers are unlucky for it
+//! (the lowest of the grid's values is itself biased low by its noise; docs/calibration.md, "Bands on fresh
+//! numbers").
 
 use super::fit::Context;
 use super::objective::run_score;
@@ -108,6 +117,13 @@ pub struct Profile {
     /// fit).
     #[serde(default)]
     pub others_refit_evaluations: usize,
+    /// The population fit's own mean score on the grid's random numbers less the lowest grid value's, m (none if it
+    /// could not be simulated): within two standard errors, the fit is in its own band.
+    #[serde(default)]
+    pub population_excess_m: Option<f64>,
+    /// The standard error of that difference, paired over the runs, m.
+    #[serde(default)]
+    pub population_excess_se_m: Option<f64>,
 }
 
 impl Profile {
@@ -127,12 +143,21 @@ impl Profile {
             [a, b] => format!("{a:.3} to {b:.3} of {across}"),
         }
     }
+
+    /// The population fit against the lowest grid value, in words ("; the population fit +0.31 ± 0.45 m against
+    /// the lowest (within its band)"); empty if it could not be simulated.
+    pub fn describe_population(&self) -> String {
+        let (Some(e), Some(se)) = (self.population_excess_m, self.population_excess_se_m) else { return String::new() };
+        let within = if e <= 2.0 * se { "within its band" } else { "outside its band" };
+        format!("; the population fit {e:+.2} ± {se:.2} m against the lowest ({within})")
+    }
 }
 
 /// The profile of `scores[k][j]`, the score of run j at grid value `values[k]` (ascending; values that could not be
 /// simulated hold NaN scores and are left out), the others fitted again with `refit_evaluations` at each value (0:
-/// held); none if no value has scores or there are no runs.
-pub fn profile(values: &[f64], scores: &[Vec<f64>], refit_evaluations: usize) -> Option<Profile> {
+/// held), with the population fit's scores `fitted[j]` on the same numbers compared to the lowest; none if no value
+/// has scores or there are no runs.
+pub fn profile(values: &[f64], scores: &[Vec<f64>], refit_evaluations: usize, fitted: &[f64]) -> Option<Profile> {
     let ok: Vec<usize> = (0..values.len()).filter(|&k| scores[k].iter().all(|v| v.is_finite())).collect();
     let score_m: Vec<f64> = ok.iter().map(|&k| mean(&scores[k])).collect();
     let best = (0..ok.len()).min_by(|&a, &b| score_m[a].total_cmp(&score_m[b]))?;
@@ -141,6 +166,9 @@ pub fn profile(values: &[f64], scores: &[Vec<f64>], refit_evaluations: usize) ->
     // The best value qualifies (excess 0) whenever there are runs; the values ascend.
     let as_good: Vec<f64> =
         (0..ok.len()).filter(|&i| excess_m[i] <= 2.0 * excess_se_m[i]).map(|i| values[ok[i]]).collect();
+    let lowest = &scores[ok[best]];
+    let population =
+        (fitted.len() == lowest.len() && fitted.iter().all(|v| v.is_finite())).then(|| paired_excess(fitted, lowest));
     Some(Profile {
         values: ok.iter().map(|&k| values[k]).collect(),
         score_m,
@@ -148,6 +176,8 @@ pub fn profile(values: &[f64], scores: &[Vec<f64>], refit_evaluations: usize) ->
         excess_se_m,
         as_good: [*as_good.first()?, *as_good.last()?],
         others_refit_evaluations: refit_evaluations,
+        population_excess_m: population.map(|p| p.0),
+        population_excess_se_m: population.map(|p| p.1),
     })
 }
 
@@ -159,6 +189,10 @@ fn refit_others(ctx: &Context, c: &Candidate, others: &[FreeParam], which: &[usi
     ctx.simulations.fetch_add(quiet.simulations.load(Ordering::Relaxed), Ordering::Relaxed);
     fitted
 }
+
+/// The streams of the back-analysis's simulations: an offset from the seed that neither the population fit's searches
+/// (`seed + k`, k < 10) nor its choice between them use, so no grid value is scored on numbers it was fitted on.
+pub const BAND_SEED_OFFSET: u64 = 0xba2d_5eed;
 
 /// Is this a parameter the per-run back-analysis fits (locations, not spreads between rocks such as `cr_sd` or
 /// `dynamic_friction_sd_deg`; the slope roughness `roughness_sd_deg` moves a run's median, so it counts)?
@@ -172,7 +206,18 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
     let g = ctx.cfg.back_analysis.grid_points;
     let repeats = ctx.cfg.back_analysis.repeats.unwrap_or(ctx.cfg.search_repeats);
     let refit = ctx.cfg.profile_refit_evaluations(ctx.model.kind());
+    let band_seed = ctx.cfg.seed.wrapping_add(BAND_SEED_OFFSET);
     let mut out = BackAnalysis::default();
+    let scored = |sims: crate::Result<Vec<super::model::RunSims>>| match sims {
+        Ok(s) => s.iter().map(|r| run_score(ctx.cfg, &runs[r.run], r)).collect(),
+        Err(_) => vec![f64::NAN; which.len()],
+    };
+    // The population fit on the grid's numbers, which every profile compares with its lowest value.
+    let fitted: Vec<f64> = if free.iter().any(|p| p.name.contains('.')) {
+        scored(ctx.sims_seeded(base, which, 0..repeats, band_seed))
+    } else {
+        Vec::new()
+    };
     for p in free.iter().filter(|p| p.name.contains('.')) {
         let (material, parameter) = p.name.split_once('.').unwrap_or(("", &p.name));
         let location = is_location(&p.name);
@@ -195,29 +240,26 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
             c.params.set(p.name.clone(), v);
             super::params::normalize(&mut c.params);
             // The others held: for the per-run values, and for the band unless they are fitted again.
-            let held = (location || refitted == 0).then(|| ctx.sims(&c, which, repeats));
+            let held = (location || refitted == 0).then(|| ctx.sims_seeded(&c, which, 0..repeats, band_seed));
             if let (true, Some(sims)) = (location, &held) {
                 medians.push(match sims {
                     Ok(s) => s.iter().map(|r| r.median_runout()).collect(),
                     Err(_) => vec![f64::NAN; which.len()],
                 });
             }
-            let scored = match held {
+            scores.push(scored(match held {
                 Some(sims) if refitted == 0 => sims,
-                _ => ctx.sims(&refit_others(ctx, &c, &others, which, refitted), which, repeats),
-            };
-            scores.push(match scored {
-                Ok(s) => s.iter().map(|r| run_score(ctx.cfg, &runs[r.run], r)).collect(),
-                Err(_) => vec![f64::NAN; which.len()],
-            });
+                _ => ctx.sims_seeded(&refit_others(ctx, &c, &others, which, refitted), which, 0..repeats, band_seed),
+            }));
         }
         let population = base.params.get_or(&p.name, f64::NAN);
-        let profile = profile(&grid, &scores, refitted);
+        let profile = profile(&grid, &scores, refitted, &fitted);
         if let Some(pr) = &profile {
             (ctx.log)(&format!(
-                "{}: the calibration runs' mean score is as good as the best at {}",
+                "{}: the calibration runs' mean score is as good as the best at {}{}",
                 p.name,
-                pr.describe()
+                pr.describe(),
+                pr.describe_population()
             ));
         }
         if !location {
@@ -279,7 +321,7 @@ mod tests {
         // average by 0.1 but within its spread (differences 0.9, −0.5, −0.1: mean 0.1, se 0.41); 1.5 could not be
         // simulated.
         let scores = vec![vec![3.0, 4.0, 5.0], vec![2.0, 3.0, 4.0], vec![2.9, 2.5, 3.9], vec![f64::NAN; 3]];
-        let p = profile(&values, &scores, 0).unwrap();
+        let p = profile(&values, &scores, 0, &[]).unwrap();
         assert_eq!(p.values, [0.0, 0.5, 1.0]);
         assert_eq!(p.excess_m[1], 0.0);
         assert!((p.excess_m[0] - 1.0).abs() < 1e-12 && p.excess_se_m[0] < 1e-12);
@@ -287,12 +329,28 @@ mod tests {
         assert!((p.excess_se_m[2] - 0.4163).abs() < 1e-3, "{:?}", p.excess_se_m);
         assert_eq!(p.as_good, [0.5, 1.0]);
         assert_eq!(p.describe(), "0.500 to 1.000 of 3 values across 0.000-1.000");
+        assert_eq!((p.population_excess_m, p.describe_population()), (None, String::new()), "no fit scores");
+        // The population fit on the same numbers against the lowest value: 0.1 ± 0.058 above it is within its band;
+        // 1 above it on every run is not.
+        let fit = profile(&values, &scores, 0, &[2.2, 3.1, 4.0]).unwrap();
+        assert!((fit.population_excess_m.unwrap() - 0.1).abs() < 1e-12);
+        assert!((fit.population_excess_se_m.unwrap() - 0.1 / 3f64.sqrt()).abs() < 1e-12);
+        assert_eq!(
+            fit.describe_population(),
+            "; the population fit +0.10 ± 0.06 m against the lowest (within its band)"
+        );
+        let off = profile(&values, &scores, 0, &[3.0, 4.0, 5.0]).unwrap();
+        assert_eq!(
+            off.describe_population(),
+            "; the population fit +1.00 ± 0.00 m against the lowest (outside its band)"
+        );
+        assert_eq!(profile(&values, &scores, 0, &[2.0, f64::NAN, 4.0]).unwrap().population_excess_m, None);
         let open = super::Profile { as_good: [0.0, 1.0], ..p.clone() };
         assert_eq!(open.describe(), "all 3 values across 0.000-1.000: the runs leave it open");
         let one = super::Profile { as_good: [0.5, 0.5], ..p };
         assert_eq!(one.describe(), "only 0.500 of 3 values across 0.000-1.000");
-        assert!(profile(&values, &vec![vec![f64::NAN]; 4], 0).is_none());
-        assert!(profile(&values, &vec![Vec::new(); 4], 0).is_none(), "no runs");
+        assert!(profile(&values, &vec![vec![f64::NAN]; 4], 0, &[]).is_none());
+        assert!(profile(&values, &vec![Vec::new(); 4], 0, &[]).is_none(), "no runs");
     }
 
     #[test]

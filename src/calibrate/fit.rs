@@ -73,7 +73,8 @@ impl<'a> Context<'a> {
         self.sims_seeded(c, which, repeats, self.cfg.seed)
     }
 
-    fn sims_seeded(
+    /// [`Context::sims_repeats`] on the streams of `seed` instead of the settings' seed.
+    pub fn sims_seeded(
         &self,
         c: &Candidate,
         which: &[usize],

@@ -344,11 +344,17 @@ pub fn write_report(
         );
         series.error_bars =
             Some(p.excess_m.iter().zip(&p.excess_se_m).map(|(e, se)| (e - 2.0 * se, e + 2.0 * se)).collect());
+        let mut series = vec![series];
+        if let (Some(e), Some(se), true) = (p.population_excess_m, p.population_excess_se_m, fit.is_finite()) {
+            let mut point = Series::new("population fit", vec![(fit, e)], SeriesStyle::Markers, CATEGORICAL[1]);
+            point.error_bars = Some(vec![(e - 2.0 * se, e + 2.0 * se)]);
+            series.push(point);
+        }
         let chart = Chart {
             title: format!("How sharply the calibration runs pin {name}"),
             x_label: name.clone(),
             y_label: "mean score less the lowest (m), ± 2 paired SE".into(),
-            series: vec![series],
+            series,
             hlines: vec![(0.0, String::new())],
             vlines: [(fit, "population fit".into())].into_iter().filter(|(x, _)| x.is_finite()).collect(),
             ..Default::default()
@@ -362,8 +368,9 @@ pub fn write_report(
             format!(
                 "The calibration runs' mean score (run-out CRPS plus what a track adds) along the grid of {name}, the \
                  others {others}, less the lowest, with two paired standard errors: a value whose bar reaches 0 is as \
-                 good as the best ({}).",
-                p.describe()
+                 good as the best ({}{}).",
+                p.describe(),
+                p.describe_population()
             ),
         ));
     }
@@ -862,7 +869,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         let _ = writeln!(s, "\n## Per-run back-analysis (mean ± sd over calibration runs)\n");
     }
     if !r.back_analysis.is_empty() {
-        let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds. As good as the best: the values of the grid (across the bounds) at which the calibration runs' mean score is within two standard errors of the lowest (paired over the runs): where this spans the bounds, the runs leave the parameter open whatever the fit reports (docs/calibration.md, \"How sharply the runs pin the parameters\").\n");
+        let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds. As good as the best: the values of the grid (across the bounds) at which the calibration runs' mean score is within two standard errors of the lowest (paired over the runs; simulated on random numbers the fits did not use, so no value looks better by the luck a fit found): where this spans the bounds, the runs leave the parameter open whatever the fit reports. The population fit, scored on the same numbers, is given against the lowest: outside its band, by the rule that makes the band it would not be in it (the search stopped short of the valley, its own random numbers flattered it, or these are unlucky for it: more `[back_analysis] repeats` tell which) (docs/calibration.md, \"How sharply the runs pin the parameters\").\n");
         let refit = r.profiles().map(|(_, _, p)| p.others_refit_evaluations).max().unwrap_or(0);
         let others = if refit > 0 {
             format!("At each value of a band the other free parameters were fitted again ({refit} evaluations), so the band follows their trade-offs.")
@@ -875,7 +882,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         for row in &r.back_analysis {
             let blocks: Vec<String> =
                 row.by_block.iter().map(|(b, sp)| format!("{b}: {:.3} ± {:.3} ({})", sp.mean, sp.sd, sp.n)).collect();
-            let good = row.profile.as_ref().map_or("–".to_string(), |p| p.describe());
+            let good = row.profile.as_ref().map_or("–".to_string(), |p| p.describe() + &p.describe_population());
             let _ = writeln!(
                 s,
                 "| {} | {} | {:.3} | {:.3} ± {:.3} ({}) | {} | {} | {good} |",
@@ -895,7 +902,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         let _ = writeln!(s, "| material | parameter | population fit | as good as the best (grid) |");
         let _ = writeln!(s, "|---|---|---|---|");
         for sp in &r.spread_profiles {
-            let good = sp.profile.as_ref().map_or("–".to_string(), |p| p.describe());
+            let good = sp.profile.as_ref().map_or("–".to_string(), |p| p.describe() + &p.describe_population());
             let _ = writeln!(s, "| {} | {} | {:.3} | {good} |", sp.material, sp.parameter, sp.population);
         }
     }
