@@ -10,8 +10,7 @@ use talus::calibrate::fit::{with_unit, SearchRecord};
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::objective::run_score;
-use talus::calibrate::params::Candidate;
-use talus::calibrate::params::Region;
+use talus::calibrate::params::{Candidate, Region};
 use talus::calibrate::stats::mean;
 use talus::calibrate::synthetic::{
     case_2d, case_3d, standard_zone, synthetic_2d, synthetic_3d, truth_2d, zone_overlap, Synthetic2d, Synthetic3d,
