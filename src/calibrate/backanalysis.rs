@@ -16,10 +16,10 @@
 //! `as_good` range. A range spanning the bounds says the data leave that parameter open, whatever value the
 //! population fit reports. With `[back_analysis] refit_evaluations` above 0 (the 2DLM default, 100) the other free
 //! parameters are fitted again at each grid value (from the population fit, on the population fit's random numbers),
-//! so the band follows their trade-offs, as a profile likelihood does; at 0 (the 3DRB default: a 3DRB evaluation costs seconds,
-//! and the refits would cost a population fit per grid value) they are held at the population fit, and where
-//! parameters trade off the runs leave more open jointly than the bands say. The per-run values are always found with
-//! the others held. On 3DRB a change of Cr of 10⁻⁴ already decorrelates part of the simulated paths (a
+//! so the band follows their trade-offs, as a profile likelihood does; at 0 (the 3DRB default: a 3DRB evaluation
+//! costs seconds, and the refits would cost a population fit per grid value) they are held at the population fit,
+//! and where parameters trade off the runs leave more open jointly than the bands say. The per-run values are always
+//! found with the others held. On 3DRB a change of Cr of 10⁻⁴ already decorrelates part of the simulated paths (a
 //! rigid body's bounces are chaotic), so the population fit's last steps there follow noise: docs/calibration.md,
 //! "How sharply the runs pin the parameters".
 //!
