@@ -149,6 +149,7 @@ impl Profile {
     pub fn describe_population(&self) -> String {
         let (Some(e), Some(se)) = (self.population_excess_m, self.population_excess_se_m) else { return String::new() };
         let within = if e <= 2.0 * se { "within its band" } else { "outside its band" };
+        let e = if e.abs() < 0.005 { 0.0 } else { e }; // "+0.00", not "-0.00"
         format!("; the population fit {e:+.2} ± {se:.2} m against the lowest ({within})")
     }
 }
@@ -345,6 +346,8 @@ mod tests {
             "; the population fit +1.00 ± 0.00 m against the lowest (outside its band)"
         );
         assert_eq!(profile(&values, &scores, 0, &[2.0, f64::NAN, 4.0]).unwrap().population_excess_m, None);
+        let level = profile(&values, &scores, 0, &[2.0, 3.0, 3.999]).unwrap();
+        assert!(level.describe_population().starts_with("; the population fit +0.00 ± "), "not -0.00");
         let open = super::Profile { as_good: [0.0, 1.0], ..p.clone() };
         assert_eq!(open.describe(), "all 3 values across 0.000-1.000: the runs leave it open");
         let one = super::Profile { as_good: [0.5, 0.5], ..p };
