@@ -38,6 +38,7 @@
 //! numbers").
 
 use super::fit::Context;
+use super::model::RunSims;
 use super::objective::run_score;
 use super::params::{Candidate, FreeParam};
 use super::stats::{mean, paired_excess, sample_sd};
@@ -191,6 +192,14 @@ fn refit_others(ctx: &Context, c: &Candidate, others: &[FreeParam], which: &[usi
     fitted
 }
 
+/// `f` of each run's simulations, or NaN for each of the `n` runs where they could not be made.
+fn per_run(sims: &crate::Result<Vec<RunSims>>, n: usize, f: impl Fn(&RunSims) -> f64) -> Vec<f64> {
+    match sims {
+        Ok(s) => s.iter().map(f).collect(),
+        Err(_) => vec![f64::NAN; n],
+    }
+}
+
 /// The streams of the back-analysis's simulations: an offset from the seed that neither the population fit's searches
 /// (`seed + k`, k < 10) nor its choice between them use, so no grid value is scored on numbers it was fitted on.
 pub const BAND_SEED_OFFSET: u64 = 0xba2d_5eed;
@@ -209,17 +218,15 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
     let refit = ctx.cfg.profile_refit_evaluations(ctx.model.kind());
     let band_seed = ctx.cfg.seed.wrapping_add(BAND_SEED_OFFSET);
     let mut out = BackAnalysis::default();
-    let scored = |sims: crate::Result<Vec<super::model::RunSims>>| match sims {
-        Ok(s) => s.iter().map(|r| run_score(ctx.cfg, &runs[r.run], r)).collect(),
-        Err(_) => vec![f64::NAN; which.len()],
-    };
+    let score = |r: &RunSims| run_score(ctx.cfg, &runs[r.run], r);
+    let profiled: Vec<&FreeParam> = free.iter().filter(|p| p.name.contains('.')).collect();
     // The population fit on the grid's numbers, which every profile compares with its lowest value.
-    let fitted: Vec<f64> = if free.iter().any(|p| p.name.contains('.')) {
-        scored(ctx.sims_seeded(base, which, 0..repeats, band_seed))
-    } else {
+    let fitted: Vec<f64> = if profiled.is_empty() {
         Vec::new()
+    } else {
+        per_run(&ctx.sims_seeded(base, which, 0..repeats, band_seed), which.len(), score)
     };
-    for p in free.iter().filter(|p| p.name.contains('.')) {
+    for p in profiled {
         let (material, parameter) = p.name.split_once('.').unwrap_or(("", &p.name));
         let location = is_location(&p.name);
         let others: Vec<FreeParam> = free.iter().filter(|q| q.name != p.name).cloned().collect();
@@ -243,15 +250,13 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
             // The others held: for the per-run values, and for the band unless they are fitted again.
             let held = (location || refitted == 0).then(|| ctx.sims_seeded(&c, which, 0..repeats, band_seed));
             if let (true, Some(sims)) = (location, &held) {
-                medians.push(match sims {
-                    Ok(s) => s.iter().map(|r| r.median_runout()).collect(),
-                    Err(_) => vec![f64::NAN; which.len()],
-                });
+                medians.push(per_run(sims, which.len(), RunSims::median_runout));
             }
-            scores.push(scored(match held {
+            let sims = match held {
                 Some(sims) if refitted == 0 => sims,
                 _ => ctx.sims_seeded(&refit_others(ctx, &c, &others, which, refitted), which, 0..repeats, band_seed),
-            }));
+            };
+            scores.push(per_run(&sims, which.len(), score));
         }
         let population = base.params.get_or(&p.name, f64::NAN);
         let profile = profile(&grid, &scores, refitted, &fitted);
