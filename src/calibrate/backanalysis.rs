@@ -134,20 +134,22 @@ impl Profile {
     }
 
     /// The values as good as the best, in words: "0.300 to 0.550 of 7 values across 0.050-0.800", "only 0.300 of
-    /// …", "all 7 values across …: the runs leave it open".
+    /// …", "all 7 values across …: the runs leave it open", followed by the population fit against them ("; the
+    /// population fit +0.31 ± 0.45 m against the lowest (within its band)"; nothing if it could not be simulated).
     pub fn describe(&self) -> String {
         let (lo, hi, n) = (self.values[0], self.values[self.values.len() - 1], self.values.len());
         let across = format!("{n} values across {lo:.3}-{hi:.3}");
-        match self.as_good {
+        let band = match self.as_good {
             _ if self.is_open() => format!("all {across}: the runs leave it open"),
             [a, b] if a == b => format!("only {a:.3} of {across}"),
             [a, b] => format!("{a:.3} to {b:.3} of {across}"),
-        }
+        };
+        band + &self.describe_population()
     }
 
     /// The population fit against the lowest grid value, in words ("; the population fit +0.31 ± 0.45 m against
     /// the lowest (within its band)"); empty if it could not be simulated.
-    pub fn describe_population(&self) -> String {
+    fn describe_population(&self) -> String {
         let (Some(e), Some(se)) = (self.population_excess_m, self.population_excess_se_m) else { return String::new() };
         let within = if e <= 2.0 * se { "within its band" } else { "outside its band" };
         let e = if e.abs() < 0.005 { 0.0 } else { e }; // "+0.00", not "-0.00"
@@ -262,10 +264,9 @@ pub fn back_analyse(ctx: &Context, base: &Candidate, free: &[FreeParam], which: 
         let profile = profile(&grid, &scores, refitted, &fitted);
         if let Some(pr) = &profile {
             (ctx.log)(&format!(
-                "{}: the calibration runs' mean score is as good as the best at {}{}",
+                "{}: the calibration runs' mean score is as good as the best at {}",
                 p.name,
-                pr.describe(),
-                pr.describe_population()
+                pr.describe()
             ));
         }
         if !location {
@@ -344,6 +345,11 @@ mod tests {
         assert_eq!(
             fit.describe_population(),
             "; the population fit +0.10 ± 0.06 m against the lowest (within its band)"
+        );
+        assert_eq!(
+            fit.describe(),
+            "0.500 to 1.000 of 3 values across 0.000-1.000; the population fit +0.10 ± 0.06 m against the lowest \
+             (within its band)"
         );
         let off = profile(&values, &scores, 0, &[3.0, 4.0, 5.0]).unwrap();
         assert_eq!(

@@ -368,9 +368,8 @@ pub fn write_report(
             format!(
                 "The calibration runs' mean score (run-out CRPS plus what a track adds) along the grid of {name}, the \
                  others {others}, less the lowest, with two paired standard errors: a value whose bar reaches 0 is as \
-                 good as the best ({}{}).",
-                p.describe(),
-                p.describe_population()
+                 good as the best ({}).",
+                p.describe()
             ),
         ));
     }
@@ -882,7 +881,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         for row in &r.back_analysis {
             let blocks: Vec<String> =
                 row.by_block.iter().map(|(b, sp)| format!("{b}: {:.3} ± {:.3} ({})", sp.mean, sp.sd, sp.n)).collect();
-            let good = row.profile.as_ref().map_or("–".to_string(), |p| p.describe() + &p.describe_population());
+            let good = row.profile.as_ref().map_or("–".to_string(), |p| p.describe());
             let _ = writeln!(
                 s,
                 "| {} | {} | {:.3} | {:.3} ± {:.3} ({}) | {} | {} | {good} |",
@@ -902,7 +901,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         let _ = writeln!(s, "| material | parameter | population fit | as good as the best (grid) |");
         let _ = writeln!(s, "|---|---|---|---|");
         for sp in &r.spread_profiles {
-            let good = sp.profile.as_ref().map_or("–".to_string(), |p| p.describe() + &p.describe_population());
+            let good = sp.profile.as_ref().map_or("–".to_string(), |p| p.describe());
             let _ = writeln!(s, "| {} | {} | {:.3} | {good} |", sp.material, sp.parameter, sp.population);
         }
     }
