@@ -1,6 +1,7 @@
 //! `talus calibrate` on synthetic campaigns made with talus itself (small versions of the study in
 //! `examples/calibration_study.rs`; the figures of the full study are in docs/calibration.md).
 
+use std::collections::BTreeMap;
 use talus::calibrate::backanalysis::BAND_SEED_OFFSET;
 use talus::calibrate::config::{
     BackAnalysisConfig, CalibrationConfig, EffectsConfig, ModelKind, Objective, ParamSetting,
@@ -150,7 +151,7 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
         assert!(p.as_good[0] - step < truth && truth < p.as_good[1] + step, "{} {truth}: {p:?}", r.parameter);
         // The population fit, scored on the grid's numbers, is as good as the band's best.
         let (e, se) = (p.population_excess_m.unwrap(), p.population_excess_se_m.unwrap());
-        assert!(e <= 2.0 * se, "{}: the fit {e} ± {se} above the lowest", r.parameter);
+        assert!(e <= p.population_critical_se * se, "{}: the fit {e} ± {se} above the lowest", r.parameter);
         (p.as_good, step)
     };
     let refitted: Vec<([f64; 2], f64)> = rows.iter().zip(truths).map(|(r, t)| band(r, t)).collect();
@@ -182,6 +183,38 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
     }
 }
 
+/// A band is a 95 % confidence set for the best grid value (comparisons with the best, docs/calibration.md, "Bands
+/// that hold the truth"): over twenty seeds of a synthetic profile campaign with nothing hidden (the study's
+/// `2d_control_b`), the grid value nearest each truth is in its band in all but at most one. (With one standard
+/// error in place of the critical value 13 of the 80 miss, with 1.5 four, with two one.)
+#[test]
+fn the_bands_hold_the_truth_over_seeds() {
+    let mut cfg = CalibrationConfig::default();
+    cfg.effects.max_rounds = 0;
+    let truths = [
+        ("rn_mean", TRUE_2D[0]),
+        ("rt_mean", TRUE_2D[2]),
+        ("friction_angle_deg", TRUE_2D[4]),
+        ("roughness_sd_deg", TRUE_2D[5]),
+    ];
+    let mut misses = BTreeMap::new();
+    for seed in 1..=20 {
+        let model = synthetic_2d(&case_2d("control_b", seed).unwrap(), Options2d::default()).unwrap();
+        let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
+        let c = calibrate(&model, &cfg, &cal, &hold, "seeded", None, &quiet).unwrap();
+        for (name, truth) in truths {
+            let row = c.report.back_analysis.iter().find(|r| r.parameter == name).unwrap();
+            let p = row.profile.as_ref().unwrap();
+            let nearest = (0..p.values.len())
+                .min_by(|&a, &b| (p.values[a] - truth).abs().total_cmp(&(p.values[b] - truth).abs()));
+            let v = p.values[nearest.unwrap()];
+            let missed = v < p.as_good[0] || v > p.as_good[1];
+            *misses.entry(name).or_insert(0) += missed as usize;
+        }
+    }
+    assert!(misses.values().all(|&m| m <= 1), "{misses:?}");
+}
+
 /// A free spread between rocks has no per-run value but a profile: the runs' CRPS tells a spread six times the
 /// truth from it.
 #[test]
@@ -191,6 +224,9 @@ fn a_free_spread_gets_a_profile_that_holds_its_truth() {
     let mut cfg = config_2d();
     cfg.materials.get_mut("ground").unwrap().insert("rn_sd".into(), ParamSetting::Range([0.0, 0.24]));
     cfg.effects.max_rounds = 0;
+    // Twice the default repeats: at 4 the widest spread's excess is 2.2 paired standard errors, which the band's
+    // comparisons with the best (2.39 on 7 values) cannot tell from noise; at 8 it is 2.8.
+    cfg.back_analysis.repeats = Some(8);
     let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
     let dir = tempfile::tempdir().unwrap();
     let c = calibrate(&model, &cfg, &cal, &hold, "seeded", Some(dir.path()), &quiet).unwrap();
@@ -212,6 +248,7 @@ fn a_free_spread_gets_a_profile_that_holds_its_truth() {
     // The 2DLM bands fit the others again at each value, and report.md says so under the table and in each caption.
     assert!(md.contains("the other free parameters were fitted again (100 evaluations)"), "{md}");
     assert!(md.contains("simulated on random numbers the fits did not use"), "{md}");
+    assert!(md.contains("2.39 for 7: comparisons with the best"), "the band's rule, in words: {md}");
     assert!(md.contains("m against the lowest (within its band) |"), "the fit against each band, in the tables: {md}");
     assert!(md.matches("the others fitted again at each value").count() >= 4, "{md}");
     // Each profile as a chart, shown in report.md.

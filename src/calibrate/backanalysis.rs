@@ -9,19 +9,23 @@
 //! observation (the parameter cannot explain it within the bounds) is counted as censored and left out of mean ±
 //! sd. A single run-out cannot pin down several parameters at once, hence one at a time.
 //!
-//! **How sharply the runs pin a parameter** (ours): the same simulations give, at each grid value, the campaign's
-//! mean score (each run's run-out CRPS plus what its track adds, as the effects loop scores it). The grid values
-//! whose mean score exceeds the lowest one's by no more than two standard errors of the difference (paired over the
-//! runs, on common random numbers) are ones the calibration runs cannot tell from the best: the profile's
-//! `as_good` range. A range spanning the bounds says the data leave that parameter open, whatever value the
-//! population fit reports. With `[back_analysis] refit_evaluations` above 0 (the 2DLM default, 100) the other free
-//! parameters are fitted again at each grid value (from the population fit, on the population fit's random numbers),
-//! so the band follows their trade-offs, as a profile likelihood does; at 0 (the 3DRB default: a 3DRB evaluation
-//! costs seconds, and the refits would cost a population fit per grid value) they are held at the population fit,
-//! and where parameters trade off the runs leave more open jointly than the bands say. The per-run values are always
-//! found with the others held. On 3DRB a change of Cr of 10⁻⁴ already decorrelates part of the simulated paths (a
-//! rigid body's bounces are chaotic), so the population fit's last steps there follow noise: docs/calibration.md,
-//! "How sharply the runs pin the parameters".
+//! **How sharply the runs pin a parameter** (ours): the same simulations give, at each grid value, the campaign's mean
+//! score (each run's run-out CRPS plus what its track adds, as the effects loop scores it). The grid values whose mean
+//! score exceeds the lowest one's by no more than d standard errors of the difference (paired over the runs, on common
+//! random numbers) are ones the calibration runs cannot tell from the best: the profile's `as_good` range. d is the
+//! Bonferroni form of Hsu's multiple comparisons with the best (J. C. Hsu, "Constrained simultaneous confidence
+//! intervals for multiple comparisons with the best", Annals of Statistics 12, 1984): a value is compared with the best
+//! of the k − 1 others, so d = Φ⁻¹(1 − 0.05/(k − 1)), 2.39 on a 7-value grid, and the band holds the best grid value
+//! with 95 % confidence. (Two standard errors until stop 75: over 100 seeds of each synthetic 2DLM control the truth's
+//! grid value fell outside it in up to 9 % of them; docs/calibration.md, "Bands that hold the truth".) A range spanning
+//! the bounds says the data leave that parameter open, whatever value the population fit reports. With `[back_analysis]
+//! refit_evaluations` above 0 (the 2DLM default, 100) the other free parameters are fitted again at each grid value
+//! (from the population fit, on the population fit's random numbers), so the band follows their trade-offs, as a
+//! profile likelihood does; at 0 (the 3DRB default: a 3DRB evaluation costs seconds, and the refits would cost a
+//! population fit per grid value) they are held at the population fit, and where parameters trade off the runs leave
+//! more open jointly than the bands say. The per-run values are always found with the others held. On 3DRB a change of
+//! Cr of 10⁻⁴ already decorrelates part of the simulated paths (a rigid body's bounces are chaotic), so the population
+//! fit's last steps there follow noise: docs/calibration.md, "How sharply the runs pin the parameters".
 //!
 //! A spread between rocks (`cr_sd`, `dynamic_friction_sd_deg`, `rn_sd`, …) has no per-run value (one run-out does
 //! not measure a spread), but it gets the same profile (ours): the runs' scores are CRPS, which a spread too wide or
@@ -32,16 +36,16 @@
 //! numbers a value near the fit, or one whose others were refitted on them, looks better than it is by the luck the
 //! fit found there (the winner's curse that the population fit's choice between searches avoids the same way,
 //! `fit.rs`). The population fit is scored on the same numbers, and each profile gives its excess over the lowest
-//! grid value with the paired standard error: within two, the fit is in its own band by the rule that makes the band;
-//! outside, the search stopped short of the valley, its own numbers flattered it, or these numbers are unlucky for it
-//! (the lowest of the grid's values is itself biased low by its noise; docs/calibration.md, "Bands on fresh
-//! numbers").
+//! grid value with the paired standard error: within d for one more candidate (Φ⁻¹(1 − 0.05/k), the fit against
+//! the best of the k grid values), the fit is in its own band by the rule that makes the band; outside, the search
+//! stopped short of the valley, its own numbers flattered it, or these numbers are unlucky for it (docs/calibration.md,
+//! "Bands on fresh numbers").
 
 use super::fit::Context;
 use super::model::RunSims;
 use super::objective::run_score;
 use super::params::{Candidate, FreeParam};
-use super::stats::{mean, paired_excess, sample_sd};
+use super::stats::{mean, normal_quantile, paired_excess, sample_sd};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::sync::atomic::Ordering;
@@ -111,20 +115,43 @@ pub struct Profile {
     pub excess_m: Vec<f64>,
     /// The standard error of that difference, paired over the runs, m.
     pub excess_se_m: Vec<f64>,
-    /// The lowest and highest grid values whose excess is within two standard errors: values the runs cannot
-    /// tell from the best.
+    /// The lowest and highest grid values whose excess is within `band_critical_se` standard errors: values the
+    /// runs cannot tell from the best.
     pub as_good: [f64; 2],
+    /// The standard errors an excess may reach within the band: [`best_critical`] of the other grid values (2 in
+    /// reports before stop 75).
+    #[serde(default = "two")]
+    pub band_critical_se: f64,
     /// The evaluations that fitted the other free parameters again at each grid value (0: held at the population
     /// fit).
     #[serde(default)]
     pub others_refit_evaluations: usize,
     /// The population fit's own mean score on the grid's random numbers less the lowest grid value's, m (none if it
-    /// could not be simulated): within two standard errors, the fit is in its own band.
+    /// could not be simulated): within `population_critical_se` standard errors, the fit is in its own band.
     #[serde(default)]
     pub population_excess_m: Option<f64>,
     /// The standard error of that difference, paired over the runs, m.
     #[serde(default)]
     pub population_excess_se_m: Option<f64>,
+    /// The standard errors the fit's excess may reach within the band: [`best_critical`] of the grid values (2 in
+    /// reports before stop 75).
+    #[serde(default = "two")]
+    pub population_critical_se: f64,
+}
+
+/// What reports before stop 75 used for both critical values.
+fn two() -> f64 {
+    2.0
+}
+
+/// The one-sided level of the comparisons with the best.
+pub const BAND_ALPHA: f64 = 0.05;
+
+/// The standard errors by which a candidate may exceed the best of `comparisons` others and still be as good: the
+/// Bonferroni bound of Hsu's multiple comparisons with the best, Φ⁻¹(1 − α/comparisons) with α = [`BAND_ALPHA`]
+/// (1.64 for one comparison, 2.39 for six, 2.45 for seven; see the module notes).
+pub fn best_critical(comparisons: usize) -> f64 {
+    normal_quantile(1.0 - BAND_ALPHA / comparisons.max(1) as f64)
 }
 
 impl Profile {
@@ -151,7 +178,7 @@ impl Profile {
     /// the lowest (within its band)"); empty if it could not be simulated.
     fn describe_population(&self) -> String {
         let (Some(e), Some(se)) = (self.population_excess_m, self.population_excess_se_m) else { return String::new() };
-        let within = if e <= 2.0 * se { "within its band" } else { "outside its band" };
+        let within = if e <= self.population_critical_se * se { "within its band" } else { "outside its band" };
         let e = if e.abs() < 0.005 { 0.0 } else { e }; // "+0.00", not "-0.00"
         format!("; the population fit {e:+.2} ± {se:.2} m against the lowest ({within})")
     }
@@ -168,8 +195,9 @@ pub fn profile(values: &[f64], scores: &[Vec<f64>], refit_evaluations: usize, fi
     let (excess_m, excess_se_m): (Vec<f64>, Vec<f64>) =
         ok.iter().map(|&k| paired_excess(&scores[k], &scores[ok[best]])).unzip();
     // The best value qualifies (excess 0) whenever there are runs; the values ascend.
+    let band_critical_se = best_critical(ok.len() - 1);
     let as_good: Vec<f64> =
-        (0..ok.len()).filter(|&i| excess_m[i] <= 2.0 * excess_se_m[i]).map(|i| values[ok[i]]).collect();
+        (0..ok.len()).filter(|&i| excess_m[i] <= band_critical_se * excess_se_m[i]).map(|i| values[ok[i]]).collect();
     let lowest = &scores[ok[best]];
     let population =
         (fitted.len() == lowest.len() && fitted.iter().all(|v| v.is_finite())).then(|| paired_excess(fitted, lowest));
@@ -179,9 +207,11 @@ pub fn profile(values: &[f64], scores: &[Vec<f64>], refit_evaluations: usize, fi
         excess_m,
         excess_se_m,
         as_good: [*as_good.first()?, *as_good.last()?],
+        band_critical_se,
         others_refit_evaluations: refit_evaluations,
         population_excess_m: population.map(|p| p.0),
         population_excess_se_m: population.map(|p| p.1),
+        population_critical_se: best_critical(ok.len()),
     })
 }
 
@@ -357,6 +387,20 @@ mod tests {
             "; the population fit +1.00 ± 0.00 m against the lowest (outside its band)"
         );
         assert_eq!(profile(&values, &scores, 0, &[2.0, f64::NAN, 4.0]).unwrap().population_excess_m, None);
+        // Hsu's critical values (Bonferroni): the band compares a value with the best of the 2 other values, the
+        // fit with the best of all 3. A fit 2.1 paired SE above the lowest is within (it was outside at two SE
+        // until stop 75); 2.2 SE is not.
+        assert!((p.band_critical_se - 1.959_964).abs() < 1e-5, "{}", p.band_critical_se);
+        assert!((p.population_critical_se - 2.128_045).abs() < 1e-5, "{}", p.population_critical_se);
+        assert!(
+            (super::best_critical(6) - 2.393_980).abs() < 1e-5 && (super::best_critical(7) - 2.449_998).abs() < 1e-5
+        );
+        let at_ratio = |z: f64| {
+            let x = 0.1 * 3f64.sqrt() / z; // the sd of the differences 0.1 + x, 0.1, 0.1 − x
+            profile(&values, &scores, 0, &[2.1 + x, 3.1, 4.1 - x]).unwrap().describe_population()
+        };
+        assert!(at_ratio(2.1).ends_with("(within its band)"), "{}", at_ratio(2.1));
+        assert!(at_ratio(2.2).ends_with("(outside its band)"), "{}", at_ratio(2.2));
         let level = profile(&values, &scores, 0, &[2.0, 3.0, 3.999]).unwrap();
         assert!(level.describe_population().starts_with("; the population fit +0.00 ± "), "not -0.00");
         let open = super::Profile { as_good: [0.0, 1.0], ..p.clone() };

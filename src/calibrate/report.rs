@@ -342,18 +342,20 @@ pub fn write_report(
             SeriesStyle::LineMarkers,
             CATEGORICAL[0],
         );
+        let d = p.band_critical_se;
         series.error_bars =
-            Some(p.excess_m.iter().zip(&p.excess_se_m).map(|(e, se)| (e - 2.0 * se, e + 2.0 * se)).collect());
+            Some(p.excess_m.iter().zip(&p.excess_se_m).map(|(e, se)| (e - d * se, e + d * se)).collect());
         let mut series = vec![series];
         if let (Some(e), Some(se), true) = (p.population_excess_m, p.population_excess_se_m, fit.is_finite()) {
             let mut point = Series::new("population fit", vec![(fit, e)], SeriesStyle::Markers, CATEGORICAL[1]);
-            point.error_bars = Some(vec![(e - 2.0 * se, e + 2.0 * se)]);
+            let d = p.population_critical_se;
+            point.error_bars = Some(vec![(e - d * se, e + d * se)]);
             series.push(point);
         }
         let chart = Chart {
             title: format!("How sharply the calibration runs pin {name}"),
             x_label: name.clone(),
-            y_label: "mean score less the lowest (m), ± 2 paired SE".into(),
+            y_label: format!("mean score less the lowest (m), ± {d:.2} paired SE"),
             series,
             hlines: vec![(0.0, String::new())],
             vlines: [(fit, "population fit".into())].into_iter().filter(|(x, _)| x.is_finite()).collect(),
@@ -367,8 +369,10 @@ pub fn write_report(
             file,
             format!(
                 "The calibration runs' mean score (run-out CRPS plus what a track adds) along the grid of {name}, the \
-                 others {others}, less the lowest, with two paired standard errors: a value whose bar reaches 0 is as \
+                 others {others}, less the lowest, with {d:.2} paired standard errors (the fit's bar {:.2}: comparisons \
+                 with the best, docs/calibration.md, \"Bands that hold the truth\"): a value whose bar reaches 0 is as \
                  good as the best ({}).",
+                p.population_critical_se,
                 p.describe()
             ),
         ));
@@ -868,7 +872,7 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         let _ = writeln!(s, "\n## Per-run back-analysis (mean ± sd over calibration runs)\n");
     }
     if !r.back_analysis.is_empty() {
-        let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds. As good as the best: the values of the grid (across the bounds) at which the calibration runs' mean score is within two standard errors of the lowest (paired over the runs; simulated on random numbers the fits did not use, so no value looks better by the luck a fit found): where this spans the bounds, the runs leave the parameter open whatever the fit reports. The population fit, scored on the same numbers, is given against the lowest: outside its band, by the rule that makes the band it would not be in it (the search stopped short of the valley, its own random numbers flattered it, or these are unlucky for it: more `[back_analysis] repeats` tell which; docs/calibration.md, \"How sharply the runs pin the parameters\" and \"Bands on fresh numbers\").\n");
+        let _ = writeln!(s, "Each run's own value of one parameter, the others held at the population fit; censored: runs the parameter cannot bring to their observation within its bounds. As good as the best: the values of the grid (across the bounds) at which the calibration runs' mean score is within d standard errors of the lowest (paired over the runs; simulated on random numbers the fits did not use, so no value looks better by the luck a fit found; d = Φ⁻¹(1 − 0.05/(k − 1)) on a grid of k values, 2.39 for 7: comparisons with the best, so the band holds the best grid value with 95 % confidence): where this spans the bounds, the runs leave the parameter open whatever the fit reports. The population fit, scored on the same numbers, is given against the lowest (within Φ⁻¹(1 − 0.05/k) standard errors, one comparison more): outside its band, by the rule that makes the band it would not be in it (the search stopped short of the valley, its own random numbers flattered it, or these are unlucky for it: more `[back_analysis] repeats` tell which; docs/calibration.md, \"How sharply the runs pin the parameters\", \"Bands on fresh numbers\" and \"Bands that hold the truth\").\n");
         let refit = r.profiles().map(|(_, _, p)| p.others_refit_evaluations).max().unwrap_or(0);
         let others = if refit > 0 {
             format!("At each value of a band the other free parameters were fitted again ({refit} evaluations), so the band follows their trade-offs.")
