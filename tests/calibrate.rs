@@ -185,8 +185,8 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
 
 /// A band is a 95 % confidence set for the best grid value (comparisons with the best, docs/calibration.md, "Bands
 /// that hold the truth"): over twenty seeds of a synthetic profile campaign with nothing hidden (the study's
-/// `2d_control_b`), the grid value nearest each truth is in its band in all but at most one. (With one standard
-/// error in place of the critical value 13 of the 80 miss, with 1.5 four, with two one.)
+/// `2d_control_b`), the grid value nearest each truth lies within its band's range in all but at most one. (With
+/// one standard error in place of the critical value 10 of the 80 miss, with 1.5 two, both on Rt, with two none.)
 #[test]
 fn the_bands_hold_the_truth_over_seeds() {
     let mut cfg = CalibrationConfig::default();

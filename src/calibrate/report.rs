@@ -348,8 +348,8 @@ pub fn write_report(
         let mut series = vec![series];
         if let (Some(e), Some(se), true) = (p.population_excess_m, p.population_excess_se_m, fit.is_finite()) {
             let mut point = Series::new("population fit", vec![(fit, e)], SeriesStyle::Markers, CATEGORICAL[1]);
-            let d = p.population_critical_se;
-            point.error_bars = Some(vec![(e - d * se, e + d * se)]);
+            let fit_d = p.population_critical_se;
+            point.error_bars = Some(vec![(e - fit_d * se, e + fit_d * se)]);
             series.push(point);
         }
         let chart = Chart {
