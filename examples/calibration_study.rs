@@ -39,8 +39,8 @@ fn main() {
     let bounces_3d = cfg.bounce_weight.is_some_and(|w| w > 0.0);
     // And read their simulated rest points with the survey error the settings declare (`rest_noise_m`).
     let rest_noise = cfg.rest_noise_m;
-    // And simulate with its engine settings (`[simulation]`; the figures in the README's table before 2026-11-27
-    // were measured with `impact_substeps = 1`, the default then).
+    // And simulate with its engine settings (`[simulation]`; the figures of docs/calibration-results.md's table before
+    // 2026-11-27 were measured with `impact_substeps = 1`, the default then).
     let engine = cfg.simulation.clone();
     let model_3d = move |spec: &Synthetic3d| {
         synthetic_3d(spec, engine.clone()).unwrap().with_bounce_reads(bounces_3d).with_rest_noise(rest_noise)

@@ -3,7 +3,7 @@
 //! `calibration_study` (`case_3d`: speed, speed_mixed, size, size_drag, zone, rough, control_a..e, NAME_tracked)
 //! with seed SEED (default 1); a tracked case also gets each run's true path as `observed_trajectories.csv`, every
 //! height plus Gaussian noise of sd TRACK_POINT_NOISE_M (default 0: exact tracks). The engine takes IMPACT_SUBSTEPS
-//! sub-steps at an impact (`[simulation] impact_substeps`; default the engine's, 8; the README's figures from before
+//! sub-steps at an impact (`[simulation] impact_substeps`; default the engine's, 8; the calibration figures from before
 //! 2026-11-27 were written with 1). For trying `talus calibrate --model 3drb` on files whose truth is known.
 //!
 //! Run: cargo run --release --example write_terrain_campaign -- DIR CASE [TRACK_POINT_NOISE_M [SEED [IMPACT_SUBSTEPS]]]

@@ -1329,7 +1329,7 @@ fn zone_arm(
             (ctx.log)(
                 "  on a zone with soft-ground drag a rock creeps on, to the time limit, where the slope is steeper than \
                  its dynamic friction; if that is what lengthens this arm, a lower [simulation] max_time_s shortens it \
-                 (README, \"Why a 3DRB zone arm can take an hour\")",
+                 (docs/calibration-results.md, \"Why a 3DRB zone arm can take an hour\")",
             );
         }
     }
