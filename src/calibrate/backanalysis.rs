@@ -12,24 +12,25 @@
 //! **How sharply the runs pin a parameter** (ours): the same simulations give, at each grid value, the campaign's mean
 //! score (each run's run-out CRPS plus what its track adds, as the effects loop scores it). The grid values whose mean
 //! score exceeds the lowest one's by no more than d standard errors of the difference (paired over the runs, on common
-//! random numbers) are ones the calibration runs cannot tell from the best: the profile's `as_good` range. d is the
+//! random numbers) are ones the calibration runs cannot tell from the best: the band, reported as the range of those
+//! values (`as_good`) and the values inside it that noise puts out ("0.000 to 0.300 but not 0.200"). d is the
 //! Bonferroni form of Hsu's multiple comparisons with the best (J. C. Hsu, "Constrained simultaneous confidence
 //! intervals for multiple comparisons with the best", Annals of Statistics 12, 1984): a value is compared with the best
 //! of the k − 1 others, so d = Φ⁻¹(1 − 0.05/(k − 1)), 2.39 on a 7-value grid, and the band holds the best grid value
 //! with 95 % confidence. (Two standard errors until stop 75: over 100 seeds of each synthetic 2DLM control the truth's
-//! grid value fell outside it in up to 9 % of them; docs/calibration.md, "Bands that hold the truth".) A range spanning
-//! the bounds says the data leave that parameter open, whatever value the population fit reports. With `[back_analysis]
-//! refit_evaluations` above 0 (the 2DLM default, 100) the other free parameters are fitted again at each grid value
-//! (from the population fit, on the population fit's random numbers), so the band follows their trade-offs, as a
-//! profile likelihood does; at 0 (the 3DRB default: a 3DRB evaluation costs seconds, and the refits would cost a
-//! population fit per grid value) they are held at the population fit, and where parameters trade off the runs leave
-//! more open jointly than the bands say. The per-run values are always found with the others held. On 3DRB a change of
-//! Cr of 10⁻⁴ already decorrelates part of the simulated paths (a rigid body's bounces are chaotic), so the population
-//! fit's last steps there follow noise: docs/calibration.md, "How sharply the runs pin the parameters".
+//! grid value fell outside it in up to 9 % of them; docs/calibration.md, "Bands that hold the truth".) A band holding
+//! every grid value says the data leave that parameter open, whatever value the population fit reports. With
+//! `[back_analysis] refit_evaluations` above 0 (the 2DLM default, 100) the other free parameters are fitted again at
+//! each grid value (from the population fit, on the population fit's random numbers), so the band follows their
+//! trade-offs, as a profile likelihood does; at 0 (the 3DRB default: a 3DRB evaluation costs seconds, and the refits
+//! would cost a population fit per grid value) they are held at the population fit, and where parameters trade off the
+//! runs leave more open jointly than the bands say. The per-run values are always found with the others held. On 3DRB a
+//! change of Cr of 10⁻⁴ already decorrelates part of the simulated paths (a rigid body's bounces are chaotic), so the
+//! population fit's last steps there follow noise: docs/calibration.md, "How sharply the runs pin the parameters".
 //!
 //! A spread between rocks (`cr_sd`, `dynamic_friction_sd_deg`, `rn_sd`, …) has no per-run value (one run-out does
 //! not measure a spread), but it gets the same profile (ours): the runs' scores are CRPS, which a spread too wide or
-//! too narrow raises, so its `as_good` range says how far the runs pin the spread as well.
+//! too narrow raises, so its band says how far the runs pin the spread as well.
 //!
 //! **Scored on fresh numbers** (ours, since stop 74): the grid's simulations use streams that neither the population
 //! fit nor a refit chose anything on (common to every grid value, so the differences stay paired). On the fit's own
@@ -116,7 +117,7 @@ pub struct Profile {
     /// The standard error of that difference, paired over the runs, m.
     pub excess_se_m: Vec<f64>,
     /// The lowest and highest grid values whose excess is within `band_critical_se` standard errors: values the
-    /// runs cannot tell from the best.
+    /// runs cannot tell from the best (a value between them can be out: [`Profile::gaps`]).
     pub as_good: [f64; 2],
     /// The standard errors an excess may reach within the band: [`best_critical`] of the other grid values (2 in
     /// reports before stop 75).
@@ -154,22 +155,42 @@ pub fn best_critical(comparisons: usize) -> f64 {
     normal_quantile(1.0 - BAND_ALPHA / comparisons.max(1) as f64)
 }
 
+/// Is an excess of `excess_m` with standard error `se_m` within `critical_se` standard errors of the best?
+fn within(excess_m: f64, se_m: f64, critical_se: f64) -> bool {
+    excess_m <= critical_se * se_m
+}
+
 impl Profile {
-    /// Does the band span every grid value (the runs leave the parameter open)?
-    pub fn is_open(&self) -> bool {
-        self.as_good[0] <= self.values[0] && self.as_good[1] >= self.values[self.values.len() - 1]
+    /// Whether each grid value is in the band (as good as the best).
+    fn in_band(&self) -> impl Iterator<Item = bool> + '_ {
+        self.excess_m.iter().zip(&self.excess_se_m).map(|(&e, &se)| within(e, se, self.band_critical_se))
     }
 
-    /// The values as good as the best, in words: "0.300 to 0.550 of 7 values across 0.050-0.800", "only 0.300 of
-    /// …", "all 7 values across …: the runs leave it open", followed by the population fit against them ("; the
-    /// population fit +0.31 ± 0.45 m against the lowest (within its band)"; nothing if it could not be simulated).
+    /// Is every grid value in the band (the runs leave the parameter open)?
+    pub fn is_open(&self) -> bool {
+        self.in_band().all(|b| b)
+    }
+
+    /// The grid values between the band's lowest and highest that are not in it: the band is a set of grid values,
+    /// and noise can put one above the critical value between two that are below it.
+    pub fn gaps(&self) -> Vec<f64> {
+        let [lo, hi] = self.as_good;
+        (self.values.iter().zip(self.in_band())).filter(|&(&v, b)| !b && v > lo && v < hi).map(|(&v, _)| v).collect()
+    }
+
+    /// The values as good as the best, in words: "0.300 to 0.550 of 7 values across 0.050-0.800", "0.000 to 0.300
+    /// but not 0.200 of …", "only 0.300 of …", "all 7 values across …: the runs leave it open", followed by the
+    /// population fit against them ("; the population fit +0.31 ± 0.45 m against the lowest (within its band)";
+    /// nothing if it could not be simulated).
     pub fn describe(&self) -> String {
         let (lo, hi, n) = (self.values[0], self.values[self.values.len() - 1], self.values.len());
         let across = format!("{n} values across {lo:.3}-{hi:.3}");
+        let gaps: Vec<String> = self.gaps().iter().map(|v| format!("{v:.3}")).collect();
+        let but_not = if gaps.is_empty() { String::new() } else { format!(" but not {}", gaps.join(", ")) };
         let band = match self.as_good {
             _ if self.is_open() => format!("all {across}: the runs leave it open"),
             [a, b] if a == b => format!("only {a:.3} of {across}"),
-            [a, b] => format!("{a:.3} to {b:.3} of {across}"),
+            [a, b] => format!("{a:.3} to {b:.3}{but_not} of {across}"),
         };
         band + &self.describe_population()
     }
@@ -178,7 +199,7 @@ impl Profile {
     /// the lowest (within its band)"); empty if it could not be simulated.
     fn describe_population(&self) -> String {
         let (Some(e), Some(se)) = (self.population_excess_m, self.population_excess_se_m) else { return String::new() };
-        let within = if e <= self.population_critical_se * se { "within its band" } else { "outside its band" };
+        let within = if within(e, se, self.population_critical_se) { "within its band" } else { "outside its band" };
         let e = if e.abs() < 0.005 { 0.0 } else { e }; // "+0.00", not "-0.00"
         format!("; the population fit {e:+.2} ± {se:.2} m against the lowest ({within})")
     }
@@ -196,8 +217,10 @@ pub fn profile(values: &[f64], scores: &[Vec<f64>], refit_evaluations: usize, fi
         ok.iter().map(|&k| paired_excess(&scores[k], &scores[ok[best]])).unzip();
     // The best value qualifies (excess 0) whenever there are runs; the values ascend.
     let band_critical_se = best_critical(ok.len() - 1);
-    let as_good: Vec<f64> =
-        (0..ok.len()).filter(|&i| excess_m[i] <= band_critical_se * excess_se_m[i]).map(|i| values[ok[i]]).collect();
+    let as_good: Vec<f64> = (0..ok.len())
+        .filter(|&i| within(excess_m[i], excess_se_m[i], band_critical_se))
+        .map(|i| values[ok[i]])
+        .collect();
     let lowest = &scores[ok[best]];
     let population =
         (fitted.len() == lowest.len() && fitted.iter().all(|v| v.is_finite())).then(|| paired_excess(fitted, lowest));
@@ -403,8 +426,16 @@ mod tests {
         assert!(at_ratio(2.2).ends_with("(outside its band)"), "{}", at_ratio(2.2));
         let level = profile(&values, &scores, 0, &[2.0, 3.0, 3.999]).unwrap();
         assert!(level.describe_population().starts_with("; the population fit +0.00 ± "), "not -0.00");
-        let open = super::Profile { as_good: [0.0, 1.0], ..p.clone() };
+        // Every value in: open. A value out between two that are in: a gap, named, and not open (until stop 76 a
+        // band whose ends were in was called open).
+        let open = super::Profile { as_good: [0.0, 1.0], excess_m: vec![0.0, 0.0, 0.1], ..p.clone() };
+        assert!(open.is_open() && open.gaps().is_empty());
         assert_eq!(open.describe(), "all 3 values across 0.000-1.000: the runs leave it open");
+        let gap = super::Profile { as_good: [0.0, 1.0], excess_m: vec![0.0, 1.0, 0.1], ..p.clone() };
+        assert!(!gap.is_open());
+        assert_eq!(gap.gaps(), [0.5]);
+        assert_eq!(gap.describe(), "0.000 to 1.000 but not 0.500 of 3 values across 0.000-1.000");
+        assert!(!p.is_open() && p.gaps().is_empty(), "an end out is no gap");
         let one = super::Profile { as_good: [0.5, 0.5], ..p };
         assert_eq!(one.describe(), "only 0.500 of 3 values across 0.000-1.000");
         assert!(profile(&values, &vec![vec![f64::NAN]; 4], 0, &[]).is_none());
