@@ -13,7 +13,7 @@
 //! score (each run's run-out CRPS plus what its track adds, as the effects loop scores it). The grid values whose mean
 //! score exceeds the lowest one's by no more than d standard errors of the difference (paired over the runs, on common
 //! random numbers) are ones the calibration runs cannot tell from the best: the band, reported as the range of those
-//! values (`as_good`) and the values inside it that noise puts out ("0.000 to 0.300 but not 0.200"). d is the
+//! values (`as_good`) and the values inside it that are out ("0.000 to 0.300 but not 0.200"). d is the
 //! Bonferroni form of Hsu's multiple comparisons with the best (J. C. Hsu, "Constrained simultaneous confidence
 //! intervals for multiple comparisons with the best", Annals of Statistics 12, 1984): a value is compared with the best
 //! of the k − 1 others, so d = Φ⁻¹(1 − 0.05/(k − 1)), 2.39 on a 7-value grid, and the band holds the best grid value
@@ -171,8 +171,9 @@ impl Profile {
         self.in_band().all(|b| b)
     }
 
-    /// The grid values between the band's lowest and highest that are not in it: the band is a set of grid values,
-    /// and noise can put one above the critical value between two that are below it.
+    /// The grid values between the band's lowest and highest that are not in it. The band is a set of grid values:
+    /// a neighbour of the best, its paths close to the best's, can be told apart by a smaller excess than a far value
+    /// whose paths differ, and noise can put any value out.
     pub fn gaps(&self) -> Vec<f64> {
         let [lo, hi] = self.as_good;
         (self.values.iter().zip(self.in_band())).filter(|&(&v, b)| !b && v > lo && v < hi).map(|(&v, _)| v).collect()
