@@ -68,8 +68,8 @@ pub struct SimParams {
     /// The solver's sweeps stop once no contact impulse changed by more than this in a sweep, counted as the
     /// velocity change it makes at its contact, m/s (default: [`MAX_SOLVER_TOLERANCE_MPS`], ours: a tenth of the
     /// stick test's slip speed, far below any velocity that matters to a rock's path). It takes half the sweeps of
-    /// 1e-6 on Tschamut and leaves the run-outs as they were within the scatter of seeds (README, "Performance and
-    /// convergence"). The default was 1e-6 until 2026-11-30: a model fitted before then keeps its figures with
+    /// 1e-6 on Tschamut and leaves the run-outs as they were within the scatter of seeds (docs/performance.md, "The
+    /// solver's tolerance"). The default was 1e-6 until 2026-11-30: a model fitted before then keeps its figures with
     /// `solver_tolerance_mps = 1e-6`.
     pub solver_tolerance_mps: f64,
     /// When restitution coefficients are drawn (default: per rock).
