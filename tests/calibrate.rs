@@ -151,7 +151,7 @@ fn profile_campaign_recovers_rn_rt_and_friction() {
         assert!(p.as_good[0] - step < truth && truth < p.as_good[1] + step, "{} {truth}: {p:?}", r.parameter);
         // The population fit, scored on the grid's numbers, is as good as the band's best.
         let (e, se) = (p.population_excess_m.unwrap(), p.population_excess_se_m.unwrap());
-        assert!(e <= p.population_critical_se * se, "{}: the fit {e} ± {se} above the lowest", r.parameter);
+        assert!(p.population_within().unwrap(), "{}: the fit {e} ± {se} above the lowest", r.parameter);
         (p.as_good, step)
     };
     let refitted: Vec<([f64; 2], f64)> = rows.iter().zip(truths).map(|(r, t)| band(r, t)).collect();

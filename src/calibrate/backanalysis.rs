@@ -179,6 +179,12 @@ impl Profile {
         (self.values.iter().zip(self.in_band())).filter(|&(&v, b)| !b && v > lo && v < hi).map(|(&v, _)| v).collect()
     }
 
+    /// Is the population fit within its band (its excess within `population_critical_se` standard errors)? None if
+    /// it could not be simulated.
+    pub fn population_within(&self) -> Option<bool> {
+        Some(within(self.population_excess_m?, self.population_excess_se_m?, self.population_critical_se))
+    }
+
     /// The values as good as the best, in words: "0.300 to 0.550 of 7 values across 0.050-0.800", "0.000 to 0.300
     /// but not 0.200 of …", "only 0.300 of …", "all 7 values across …: the runs leave it open", followed by the
     /// population fit against them ("; the population fit +0.31 ± 0.45 m against the lowest (within its band)";
@@ -200,7 +206,7 @@ impl Profile {
     /// the lowest (within its band)"); empty if it could not be simulated.
     fn describe_population(&self) -> String {
         let (Some(e), Some(se)) = (self.population_excess_m, self.population_excess_se_m) else { return String::new() };
-        let within = if within(e, se, self.population_critical_se) { "within its band" } else { "outside its band" };
+        let within = if self.population_within() == Some(true) { "within its band" } else { "outside its band" };
         let e = if e.abs() < 0.005 { 0.0 } else { e }; // "+0.00", not "-0.00"
         format!("; the population fit {e:+.2} ± {se:.2} m against the lowest ({within})")
     }
