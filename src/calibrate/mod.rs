@@ -367,7 +367,11 @@ pub fn calibrate(
         },
         settings: cfg.resolved(model.kind()),
     };
-    if let Some(w) = report::unrested_warning(&report.baseline.calibration, &report.final_stage.calibration) {
+    // Levelling past the field's points is a 3DRB terrain setting, suggested where none is set.
+    let field_box = (model.kind() == ModelKind::Rigid3d && cfg.terrain.level_beyond.is_none())
+        .then(|| report::field_box_m(model.runs(), cal));
+    if let Some(w) = report::unrested_warning(&report.baseline.calibration, &report.final_stage.calibration, field_box)
+    {
         log(&format!("warning: {w}"));
         report.warnings.push(w);
     }

@@ -1013,6 +1013,22 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
     s
 }
 
+/// How far [`field_box_m`] reaches past the field's points, m (ours: a few rock lengths and a DEM cell or two, so
+/// that a rock the model sends a little past the longest field run still meets ground it can stop on).
+pub const FIELD_BOX_MARGIN_M: f64 = 10.0;
+
+/// The horizontal box `[x0, y0, x1, y1]` around the release and rest points of runs `which`, widened by
+/// [`FIELD_BOX_MARGIN_M`]: where the field says the ground is, for the `level_beyond` a warning suggests. Only
+/// calibration runs go in: held-out runs choose no setting.
+pub fn field_box_m(runs: &[FieldRun], which: &[usize]) -> [f64; 4] {
+    let points = which.iter().flat_map(|&i| [runs[i].release_m, runs[i].rest_m]);
+    let [x0, y0, x1, y1] = points.fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, p| {
+        [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
+    });
+    let m = FIELD_BOX_MARGIN_M;
+    [x0 - m, y0 - m, x1 + m, y1 + m]
+}
+
 /// Share of a model's simulations of the calibration runs not at rest above which the report warns (ours).
 pub const UNRESTED_WARNING_SHARE: f64 = 0.1;
 
@@ -1021,7 +1037,9 @@ pub const UNRESTED_WARNING_SHARE: f64 = 0.1;
 /// both shares are at most [`UNRESTED_WARNING_SHARE`]. Such a run-out is taken where the rock left the terrain or
 /// stood at the time limit, short of where it would stop, so the fit and its errors say less about where rocks stop.
 /// The remedy it names follows how they ended: a larger terrain for those that left it, a longer time for the rest.
-pub fn unrested_warning(baseline: &Metrics, final_model: &Metrics) -> Option<String> {
+/// `field_box_m` ([`field_box_m`]; `[x0, y0, x1, y1]`, given where `[terrain] level_beyond` could help) is written
+/// out as the `level_beyond` polygon that levels the ground past it.
+pub fn unrested_warning(baseline: &Metrics, final_model: &Metrics, field_box_m: Option<[f64; 4]>) -> Option<String> {
     let (b, f) = (baseline.not_stopped_fraction, final_model.not_stopped_fraction);
     let (b_left, f_left) = (baseline.left_terrain_fraction, final_model.left_terrain_fraction);
     (b.max(f) > UNRESTED_WARNING_SHARE).then(|| {
@@ -1030,11 +1048,19 @@ pub fn unrested_warning(baseline: &Metrics, final_model: &Metrics) -> Option<Str
         let mut remedies = Vec::new();
         if b_left.max(f_left) > 0.0 {
             how.push(format!("{:.0} % and {:.0} % left the terrain", 100.0 * b_left, 100.0 * f_left));
-            remedies.push("extend the terrain beyond the field's rest points");
+            remedies.push(match field_box_m {
+                None => "extend the terrain beyond the field's rest points".to_string(),
+                Some([x0, y0, x1, y1]) => format!(
+                    "extend the terrain beyond the field's rest points (where the ground past the field's data is a \
+                     DEM's extrapolated margin, not surveyed, `[terrain] level_beyond = [[{x0:.1}, {y0:.1}], \
+                     [{x1:.1}, {y0:.1}], [{x1:.1}, {y1:.1}], [{x0:.1}, {y1:.1}]]` in the settings file continues it \
+                     level past the calibration runs' release and rest points, widened by {FIELD_BOX_MARGIN_M:.0} m)"
+                ),
+            });
         }
         if b_limit.max(f_limit) > 0.0 {
             how.push(format!("{:.0} % and {:.0} % ran to the time limit", 100.0 * b_limit, 100.0 * f_limit));
-            remedies.push("raise `[simulation] max_time_s`");
+            remedies.push("raise `[simulation] max_time_s`".to_string());
         }
         format!(
             "{:.0} % of the baseline's and {:.0} % of the final model's simulations of the calibration runs did not \
@@ -1061,15 +1087,35 @@ mod tests {
             left_terrain_fraction,
             ..metrics(&[run(0, 0, 10.0)], &[sims(0, &[10.0])])
         };
-        assert_eq!(unrested_warning(&m(0.015, 0.015), &m(0.1, 0.0)), None);
-        let w = unrested_warning(&m(1.0, 1.0), &m(0.14, 0.14)).unwrap();
+        assert_eq!(unrested_warning(&m(0.015, 0.015), &m(0.1, 0.0), None), None);
+        let w = unrested_warning(&m(1.0, 1.0), &m(0.14, 0.14), None).unwrap();
         assert!(w.starts_with("100 % of the baseline's and 14 % of the final model's"), "{w}");
         assert!(w.contains("(100 % and 14 % left the terrain") && w.ends_with("the field's rest points"), "{w}");
-        let w = unrested_warning(&m(0.05, 0.0), &m(0.2, 0.0)).unwrap();
+        let w = unrested_warning(&m(0.05, 0.0), &m(0.2, 0.0), None).unwrap();
         assert!(w.ends_with("raise `[simulation] max_time_s`"), "{w}");
         assert!(w.contains("(5 % and 20 % ran to the time limit)"), "{w}");
-        let w = unrested_warning(&m(0.3, 0.1), &m(0.3, 0.1)).unwrap();
+        let w = unrested_warning(&m(0.3, 0.1), &m(0.3, 0.1), None).unwrap();
         assert!(w.contains("left the terrain; 20 % and 20 % ran to") && w.contains("rest points, or raise"), "{w}");
+        // Where levelling could help, the polygon to paste, and only where rocks left the terrain.
+        let field = Some([-3.0, 120.5, 136.44, 270.0]);
+        let w = unrested_warning(&m(0.14, 0.14), &m(0.14, 0.14), field).unwrap();
+        let polygon = "`[terrain] level_beyond = [[-3.0, 120.5], [136.4, 120.5], [136.4, 270.0], [-3.0, 270.0]]`";
+        assert!(w.contains(polygon) && w.ends_with("widened by 10 m)"), "{w}");
+        let w = unrested_warning(&m(0.2, 0.0), &m(0.2, 0.0), field).unwrap();
+        assert!(!w.contains("level_beyond"), "{w}");
+    }
+
+    #[test]
+    fn the_field_box_holds_the_calibration_runs_release_and_rest_points_and_a_margin() {
+        let at = |release: [f64; 2], rest: [f64; 2]| FieldRun {
+            release_m: [release[0], release[1], 50.0],
+            rest_m: [rest[0], rest[1], 0.0],
+            ..run(0, 0, 10.0)
+        };
+        let runs =
+            [at([30.0, 250.0], [90.0, 140.0]), at([10.0, 230.0], [120.0, 160.0]), at([0.0, 0.0], [500.0, 500.0])];
+        // The third run is held out: it sets nothing.
+        assert_eq!(field_box_m(&runs, &[0, 1]), [0.0, 130.0, 130.0, 260.0]);
     }
 
     #[test]
