@@ -367,8 +367,8 @@ pub fn calibrate(
         },
         settings: cfg.resolved(model.kind()),
     };
-    // Levelling past the field's points is a 3DRB terrain setting, suggested where none is set.
-    let field_box = (model.kind() == ModelKind::Rigid3d && cfg.terrain.level_beyond.is_none())
+    // Levelling past the field's points is suggested where the settings could level and do not.
+    let field_box = (model.levelled_by_settings() && cfg.terrain.level_beyond.is_none())
         .then(|| report::field_box_m(model.runs(), cal));
     if let Some(w) = report::unrested_warning(&report.baseline.calibration, &report.final_stage.calibration, field_box)
     {

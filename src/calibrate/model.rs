@@ -210,6 +210,11 @@ pub trait Model: Sync {
     fn dominant_material(&self, region: &super::params::Region) -> String;
     /// Where residual maps go.
     fn map_frame(&self) -> MapFrame;
+    /// True if the settings' `[terrain] level_beyond` shapes this model's ground (a 3DRB model read from files; a
+    /// synthetic one builds its own).
+    fn levelled_by_settings(&self) -> bool {
+        false
+    }
     /// How the model releases and reads its simulations.
     fn reading(&self) -> &Reading;
     /// Releases of a simulated rock, at most ([`super::config::CalibrationConfig::release_attempts`]).
@@ -302,6 +307,9 @@ impl Model for WithRuns<'_> {
     }
     fn map_frame(&self) -> MapFrame {
         self.inner.map_frame()
+    }
+    fn levelled_by_settings(&self) -> bool {
+        self.inner.levelled_by_settings()
     }
     fn reading(&self) -> &Reading {
         self.inner.reading()

@@ -309,6 +309,10 @@ impl Model for Model3d {
         &self.notes
     }
 
+    fn levelled_by_settings(&self) -> bool {
+        self.files.is_some()
+    }
+
     fn map_frame(&self) -> MapFrame {
         let (x0, y0, x1, y1) = self.terrain.surface.bounds_xy();
         let o = self.terrain.origin;

@@ -863,6 +863,8 @@ mod tests {
         let cfg = super::super::config::CalibrationConfig::default();
         let read = Model3d::new(&campaign, runs, groups, &dir.path().join("terrain.obj"), &cfg, "test").unwrap();
         let memory = synthetic_3d(&spec, SimParams::default()).unwrap();
+        // Only the model read from files takes `[terrain] level_beyond` from the settings (a warning suggests it).
+        assert!(read.levelled_by_settings() && !memory.levelled_by_settings());
         assert_eq!(read.runs().len(), memory.runs().len());
         for (a, b) in read.runs().iter().zip(memory.runs()) {
             assert_eq!(
