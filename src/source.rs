@@ -113,11 +113,7 @@ impl Sources {
                     }
                 }
                 SourceKind::Polygon => {
-                    let bbox = pts
-                        .iter()
-                        .fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, p| {
-                            [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
-                        });
+                    let bbox = crate::terrain::bbox_xy(pts.iter().copied());
                     // Area over the terrain, by a fixed 64 × 64 lattice over the bounding box.
                     let (mut inside, mut covered) = (0usize, 0usize);
                     for a in 0..64 {

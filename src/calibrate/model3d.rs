@@ -317,12 +317,7 @@ impl Model for Model3d {
         let (x0, y0, x1, y1) = self.terrain.surface.bounds_xy();
         let o = self.terrain.origin;
         let terrain_box = [x0 + o.x, y0 + o.y, x1 + o.x, y1 + o.y];
-        let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
-        for r in &self.runs {
-            for p in [r.release_m, r.rest_m] {
-                b = [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])];
-            }
-        }
+        let b = crate::terrain::bbox_xy(self.runs.iter().flat_map(|r| [r.release_m, r.rest_m]));
         let pad = 0.15 * (b[2] - b[0]).max(b[3] - b[1]) + 10.0;
         let extent = [
             (b[0] - pad).max(terrain_box[0]),

@@ -62,11 +62,7 @@ impl Region {
     /// Bounding box (x_min, y_min, x_max, y_max).
     pub fn bbox(&self) -> [f64; 4] {
         match self {
-            Region::Polygon(p) => {
-                p.iter().fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, q| {
-                    [b[0].min(q[0]), b[1].min(q[1]), b[2].max(q[0]), b[3].max(q[1])]
-                })
-            }
+            Region::Polygon(p) => crate::terrain::bbox_xy(p.iter().copied()),
             Region::Interval([a, b]) => [*a, f64::NEG_INFINITY, *b, f64::INFINITY],
         }
     }

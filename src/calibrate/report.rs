@@ -1021,10 +1021,7 @@ pub const FIELD_BOX_MARGIN_M: f64 = 10.0;
 /// [`FIELD_BOX_MARGIN_M`]: where the field says the ground is, for the `level_beyond` a warning suggests. Only
 /// calibration runs go in: held-out runs choose no setting.
 pub fn field_box_m(runs: &[FieldRun], which: &[usize]) -> [f64; 4] {
-    let points = which.iter().flat_map(|&i| [runs[i].release_m, runs[i].rest_m]);
-    let [x0, y0, x1, y1] = points.fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, p| {
-        [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
-    });
+    let [x0, y0, x1, y1] = crate::terrain::bbox_xy(which.iter().flat_map(|&i| [runs[i].release_m, runs[i].rest_m]));
     let m = FIELD_BOX_MARGIN_M;
     [x0 - m, y0 - m, x1 + m, y1 + m]
 }

@@ -180,6 +180,14 @@ pub fn horizontal_to_local(up: UpAxis, origin: &Vector3<f64>, p: [f64; 2]) -> [f
     [v.x - origin.x, v.y - origin.y]
 }
 
+/// Horizontal bounding box `[x_min, y_min, x_max, y_max]` of points whose first two coordinates are x and y
+/// (polygon vertices `[x, y]` or positions `[x, y, z]`); infinite (min > max) for no points.
+pub fn bbox_xy<const N: usize>(points: impl IntoIterator<Item = [f64; N]>) -> [f64; 4] {
+    points.into_iter().fold([f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY], |b, p| {
+        [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])]
+    })
+}
+
 /// Even–odd point-in-polygon test.
 pub fn point_in_polygon(x: f64, y: f64, poly: &[[f64; 2]]) -> bool {
     let mut inside = false;
