@@ -4,20 +4,23 @@
 use std::collections::BTreeMap;
 use talus::calibrate::backanalysis::BAND_SEED_OFFSET;
 use talus::calibrate::config::{
-    BackAnalysisConfig, CalibrationConfig, EffectsConfig, ModelKind, Objective, ParamSetting,
+    BackAnalysisConfig, CalibrationConfig, EffectsConfig, LevelBeyond, ModelKind, Objective, ParamSetting,
 };
 use talus::calibrate::crossval::fold_assignment;
 use talus::calibrate::fit::{with_unit, SearchRecord};
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
+use talus::calibrate::model3d::Model3d;
 use talus::calibrate::objective::run_score;
 use talus::calibrate::params::{Candidate, Region};
+use talus::calibrate::report::field_box_m;
 use talus::calibrate::stats::mean;
 use talus::calibrate::synthetic::{
     case_2d, case_3d, standard_zone, synthetic_2d, synthetic_3d, truth_2d, zone_overlap, Synthetic2d, Synthetic3d,
     TRUE_2D,
 };
 use talus::calibrate::{base_candidate, calibrate, split, Model};
+use talus::campaign::{Campaign, Ground};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
 
@@ -1249,6 +1252,50 @@ fn a_3drb_calibration_warns_of_what_its_terrain_does_not_use() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert_eq!(err.matches(&format!("warning: {note}")).count(), 1, "{err}");
+}
+
+#[test]
+fn level_beyond_field_levels_the_ground_past_each_calibrations_own_runs() {
+    // Tschamut's proxy DEM pads the surveyed ground with its trend plane, a slope nobody surveyed. With
+    // `level_beyond = "field"` a calibration levels the ground past its own field box (the runs' release points
+    // and its calibration runs' rest points, widened by 10 m): inside it the proxy as read, past it level.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/tschamut2014");
+    let mut cfg = CalibrationConfig { repeats: 2, search_repeats: 1, max_evaluations: Some(2), ..Default::default() };
+    cfg.terrain.level_beyond = Some(LevelBeyond::Field);
+    cfg.effects.max_rounds = 0;
+    cfg.back_analysis.enabled = false;
+    let campaign = Campaign::read_on(&dir, Ground::Terrain).unwrap();
+    let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, cfg.group_link_m).unwrap();
+    let model = Model3d::new(&campaign, runs, groups, &dir.join("terrain_proxy.asc"), &cfg, "test").unwrap();
+    let (cal, hold) = split::seeded_split(model.runs(), 0.25, 1);
+    let polygon = field_box_m(model.runs(), &cal);
+    let [x0, y0] = polygon[0];
+    let [x1, y1] = polygon[2];
+    let levelled = model.relevelled(&cfg, polygon.clone()).unwrap().unwrap();
+    let height = |m: &Model3d, x: f64, y: f64| {
+        let o = m.terrain().origin;
+        m.terrain().surface.height(x - o.x, y - o.y).unwrap()
+    };
+    let (xm, ym) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+    assert_eq!(height(&levelled, xm, ym), height(&model, xm, ym));
+    // Below the box (the deposition area's padded margin, falling away in the proxy) the ground stays level along
+    // the slope: every node there takes the height of the nearest node inside.
+    let (below, farther) = (height(&levelled, xm, y0 - 15.0), height(&levelled, xm, y0 - 30.0));
+    assert_eq!(below, farther);
+    assert!(height(&model, xm, y0 - 15.0) - height(&model, xm, y0 - 30.0) > 1.0, "the proxy falls there");
+    // The calibration levels past its own box, says so, and writes it into its run scenario.
+    let out = tempfile::tempdir().unwrap();
+    let (cal, hold) = (&cal[..12], &hold[..4]);
+    let r = calibrate(&model, &cfg, cal, hold, "seeded", Some(out.path()), &quiet).unwrap().report;
+    let own = field_box_m(model.runs(), cal);
+    assert_ne!(own, polygon, "twelve runs draw another box");
+    assert_eq!(r.levelled_beyond_m.as_ref(), Some(&own));
+    let md = std::fs::read_to_string(out.path().join("report.md")).unwrap();
+    assert!(md.contains("**Ground:** the ground is levelled past [["), "report.md lacks the levelling");
+    let scenario = std::fs::read_to_string(out.path().join("calibrated.toml")).unwrap();
+    assert!(scenario.contains("level_beyond"), "{scenario}");
+    // No warning suggests a polygon to a calibration that levelled.
+    assert!(r.warnings.iter().all(|w| !w.contains("level_beyond = [[")), "{:?}", r.warnings);
 }
 
 #[test]

@@ -231,8 +231,60 @@ pub struct TerrainMap {
     /// Keep only the terrain inside this polygon (see [`crate::scenario::TerrainSpec::clip`]).
     pub clip: Option<Vec<[f64; 2]>>,
     /// Continue the ground inside this polygon level past its edge (see
-    /// [`crate::scenario::TerrainSpec::level_beyond`]).
-    pub level_beyond: Option<Vec<[f64; 2]>>,
+    /// [`crate::scenario::TerrainSpec::level_beyond`]), or inside the field's box, `"field"` ([`LevelBeyond`]).
+    pub level_beyond: Option<LevelBeyond>,
+}
+
+/// `[terrain] level_beyond` of a calibration: a polygon, as in a scenario, or `"field"`: the box of the runs'
+/// release points and the calibration runs' rest points, widened by [`super::report::FIELD_BOX_MARGIN_M`]
+/// ([`super::report::field_box_m`]), computed by each calibration from its own runs, so that each fold of a k-fold
+/// cross-validation levels past its own calibration runs, not past the runs it holds out (ours).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawLevelBeyond", into = "RawLevelBeyond")]
+pub enum LevelBeyond {
+    /// Level past this polygon (x, y in the terrain files' horizontal frame).
+    Polygon(Vec<[f64; 2]>),
+    /// Level past the field's box.
+    Field,
+}
+
+impl LevelBeyond {
+    /// The polygon, if one is given.
+    pub fn polygon(&self) -> Option<&Vec<[f64; 2]>> {
+        match self {
+            LevelBeyond::Polygon(p) => Some(p),
+            LevelBeyond::Field => None,
+        }
+    }
+}
+
+/// `level_beyond` as written.
+#[derive(Serialize, Deserialize)]
+#[serde(untagged, expecting = "expected a polygon [[x, y], ...] or \"field\"")]
+enum RawLevelBeyond {
+    Polygon(Vec<[f64; 2]>),
+    Word(String),
+}
+
+impl TryFrom<RawLevelBeyond> for LevelBeyond {
+    type Error = String;
+
+    fn try_from(raw: RawLevelBeyond) -> std::result::Result<LevelBeyond, String> {
+        match raw {
+            RawLevelBeyond::Polygon(p) => Ok(LevelBeyond::Polygon(p)),
+            RawLevelBeyond::Word(w) if w == "field" => Ok(LevelBeyond::Field),
+            RawLevelBeyond::Word(w) => Err(format!("unknown `{w}`: expected a polygon [[x, y], ...] or \"field\"")),
+        }
+    }
+}
+
+impl From<LevelBeyond> for RawLevelBeyond {
+    fn from(l: LevelBeyond) -> RawLevelBeyond {
+        match l {
+            LevelBeyond::Polygon(p) => RawLevelBeyond::Polygon(p),
+            LevelBeyond::Field => RawLevelBeyond::Word("field".into()),
+        }
+    }
 }
 
 /// The objective the population fit minimises.
@@ -769,7 +821,7 @@ impl CalibrationConfig {
         if let Some(clip) = &self.terrain.clip {
             crate::scenario::check_polygon(&f("terrain.clip"), clip)?;
         }
-        if let Some(level) = &self.terrain.level_beyond {
+        if let Some(level) = self.terrain.level_beyond.as_ref().and_then(LevelBeyond::polygon) {
             crate::scenario::check_polygon(&f("terrain.level_beyond"), level)?;
         }
         let e = &self.effects;
@@ -1050,6 +1102,26 @@ mod tests {
         for p in ["rn_sd", "rt_sd"] {
             assert_eq!(cfg.setting(ModelKind::Lumped2d, "default", p), ParamSetting::Fixed(0.05), "{p}");
         }
+    }
+
+    #[test]
+    fn level_beyond_is_a_polygon_or_the_field() {
+        let read = |t: &str| CalibrationConfig::from_toml_str(&format!("[terrain]\nlevel_beyond = {t}\n"), "c.toml");
+        assert_eq!(read("\"field\"").unwrap().terrain.level_beyond, Some(LevelBeyond::Field));
+        let square = read("[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]").unwrap().terrain.level_beyond;
+        assert_eq!(square, Some(LevelBeyond::Polygon(vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]])));
+        // Resolved settings write it back as it was written.
+        let cfg = read("\"field\"").unwrap();
+        let again = CalibrationConfig::from_toml_str(&toml::to_string(&cfg).unwrap(), "again.toml").unwrap();
+        assert_eq!(again.terrain.level_beyond, Some(LevelBeyond::Field));
+        let expected = "expected a polygon [[x, y], ...] or \"field\"";
+        for (bad, says) in [("\"fields\"", "unknown `fields`"), ("3", expected)] {
+            let e = read(bad).unwrap_err().to_string();
+            assert!(e.contains("c.toml:2") && e.contains(says), "{e}");
+        }
+        // A polygon is checked as in a scenario.
+        let e = read("[[0.0, 0.0], [1.0, 0.0]]").unwrap_err().to_string();
+        assert!(e.contains("terrain.level_beyond"), "{e}");
     }
 
     #[test]

@@ -142,6 +142,21 @@ pub fn calibrate(
     }
     // A library caller may not have come through `open_model`: an effect name it cannot use is an error here too.
     cfg.check_effects(model.kind(), "calibration settings")?;
+    // `level_beyond = "field"`: the ground levelled past this calibration's own field box.
+    let relevelled = match cfg.terrain.level_beyond {
+        Some(config::LevelBeyond::Field) => {
+            let polygon = report::field_box_m(model.runs(), cal);
+            let m = model.relevelled(cfg, polygon.clone())?;
+            log(&match m {
+                Some(_) => report::levelled_note(&polygon),
+                None => "note: level_beyond = \"field\" is for a 3DRB model read from files: unused".into(),
+            });
+            m.map(|m| (m, polygon))
+        }
+        _ => None,
+    };
+    let levelled_beyond_m = relevelled.as_ref().map(|(_, polygon)| polygon.clone());
+    let model: &dyn Model = relevelled.as_ref().map_or(model, |(m, _)| m.as_ref());
     // Held-out release points take no part in the release groups the calibration sees.
     let (grouped, groups) = runs::calibration_groups(model.runs(), cal, model.groups().link_m);
     let regrouped = model::WithRuns::new(model, grouped, groups);
@@ -324,6 +339,7 @@ pub fn calibrate(
         release_groups,
         duplicate_runs: runs::duplicate_runs(runs),
         warnings: model.input_notes().to_vec(),
+        levelled_beyond_m,
         runs_not_started: not_started,
         runs_stalling: stalling,
         baseline: report::Stage::new(
@@ -370,7 +386,8 @@ pub fn calibrate(
     // Levelling past the field's points is suggested where the settings could level and do not.
     let field_box = (model.levelled_by_settings() && cfg.terrain.level_beyond.is_none())
         .then(|| report::field_box_m(model.runs(), cal));
-    if let Some(w) = report::unrested_warning(&report.baseline.calibration, &report.final_stage.calibration, field_box)
+    if let Some(w) =
+        report::unrested_warning(&report.baseline.calibration, &report.final_stage.calibration, field_box.as_deref())
     {
         log(&format!("warning: {w}"));
         report.warnings.push(w);

@@ -6,7 +6,7 @@
 //! standard-normal draws behind its restitution coefficients, so differences between candidates are differences of
 //! the model, not of luck (physics.md §5), and a run gets the same streams in every split and fold.
 
-use super::config::ModelKind;
+use super::config::{CalibrationConfig, ModelKind};
 use super::params::Candidate;
 use super::runs::{FieldRun, ReleaseGroups, NOT_STARTED_M};
 use super::stats::{median, quantile_sorted, sorted};
@@ -214,6 +214,11 @@ pub trait Model: Sync {
     /// synthetic one builds its own).
     fn levelled_by_settings(&self) -> bool {
         false
+    }
+    /// The model with its ground levelled past `polygon` (`[terrain] level_beyond = "field"`), built again from its
+    /// files with `cfg`; `None` where the settings do not shape the ground ([`Self::levelled_by_settings`]).
+    fn relevelled(&self, _cfg: &CalibrationConfig, _polygon: Vec<[f64; 2]>) -> Result<Option<Box<dyn Model>>> {
+        Ok(None)
     }
     /// How the model releases and reads its simulations.
     fn reading(&self) -> &Reading;

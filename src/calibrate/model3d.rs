@@ -2,7 +2,7 @@
 //! started from its measured release exactly as `talus run` starts a campaign source (position, velocity and spin
 //! as measured, random orientation, lifted only if a vertex is buried; [`crate::source`]).
 
-use super::config::{CalibrationConfig, ModelKind};
+use super::config::{CalibrationConfig, LevelBeyond, ModelKind};
 use super::effects::EffectKind;
 use super::impacts::{read_impacts, tangential_restitutions_as_tracked};
 use super::model::{MapFrame, Model, PathSummary, PathThinner, Prepared, Reading, Sim, SimEnd};
@@ -21,7 +21,7 @@ use crate::source::measured_release;
 use crate::terrain::{horizontal_to_local, Material, Terrain, UpAxis};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// The 3DRB engine bound to a campaign and a terrain.
 #[derive(Debug, Clone)]
@@ -35,10 +35,19 @@ pub struct Model3d {
     dem: Option<Grid>,
     median_mass_kg: f64,
     reading: Reading,
-    /// The campaign folder and the terrain as read, for [`Model::scenario_toml`] (`None` when built from parts).
-    files: Option<(std::path::PathBuf, TerrainSpec)>,
+    /// The files read (`None` when built from parts).
+    files: Option<Files>,
     /// [`Model::input_notes`].
     notes: Vec<String>,
+}
+
+/// What a model read from files was read from: the campaign folder and the terrain as read, for
+/// [`Model::scenario_files`], and the settings' name, to read them again levelled ([`Model3d::relevelled`]).
+#[derive(Debug, Clone)]
+struct Files {
+    campaign_dir: PathBuf,
+    spec: TerrainSpec,
+    source: String,
 }
 
 /// The terrain as messages name it: `the terrain, which spans x [a, b] and y [c, d]`, its horizontal extent in the
@@ -103,7 +112,7 @@ impl Model3d {
             material_names: map.material_names.clone(),
             zones: map.zones.clone(),
             clip: map.clip.clone(),
-            level_beyond: map.level_beyond.clone(),
+            level_beyond: map.level_beyond.as_ref().and_then(LevelBeyond::polygon).cloned(),
         };
         let crs = dem.as_ref().map(|g| g.crs.clone()).unwrap_or_default();
         let mut terrain = crate::terrain::build::assemble_terrain(
@@ -137,7 +146,7 @@ impl Model3d {
         let mut model = Self::from_parts(runs, groups, terrain, bodies, cfg.simulation.clone(), dem)?
             .with_release_attempts(cfg.release_attempts)
             .with_rest_noise(cfg.rest_noise_m);
-        model.files = Some((campaign.dir.clone(), spec));
+        model.files = Some(Files { campaign_dir: campaign.dir.clone(), spec, source: source.to_string() });
         model.notes.extend(campaign.unobserved_note().into_iter().chain(high));
         Ok(model
             .with_tracks(&campaign.tracks, cfg.track_noise_m)?
@@ -224,6 +233,21 @@ impl Model3d {
     pub fn with_rest_noise(mut self, rest_noise_m: Option<f64>) -> Model3d {
         self.reading.rest_noise_m = rest_noise_m;
         self
+    }
+
+    /// The model read again from its files with the ground levelled past `polygon` (`[terrain] level_beyond`, x, y
+    /// in the terrain file's horizontal frame), for the same runs in the same order; `None` for a model built from
+    /// parts, whose ground no settings shape.
+    ///
+    /// # Errors
+    /// The files no longer read as they did, or no vertex of the terrain lies inside `polygon`.
+    pub fn relevelled(&self, cfg: &CalibrationConfig, polygon: Vec<[f64; 2]>) -> Result<Option<Model3d>> {
+        let Some(files) = &self.files else { return Ok(None) };
+        let campaign = Campaign::read_on(&files.campaign_dir, crate::campaign::Ground::Terrain)?;
+        let mut cfg = cfg.clone();
+        cfg.terrain.level_beyond = Some(LevelBeyond::Polygon(polygon));
+        let terrain_file = &files.spec.files[0];
+        Model3d::new(&campaign, self.runs.clone(), self.groups.clone(), terrain_file, &cfg, &files.source).map(Some)
     }
 
     /// The terrain (with the placeholder materials it was built with).
@@ -313,6 +337,10 @@ impl Model for Model3d {
         self.files.is_some()
     }
 
+    fn relevelled(&self, cfg: &CalibrationConfig, polygon: Vec<[f64; 2]>) -> Result<Option<Box<dyn Model>>> {
+        Ok(Model3d::relevelled(self, cfg, polygon)?.map(|m| Box::new(m) as Box<dyn Model>))
+    }
+
     fn map_frame(&self) -> MapFrame {
         let (x0, y0, x1, y1) = self.terrain.surface.bounds_xy();
         let o = self.terrain.origin;
@@ -348,12 +376,20 @@ impl Model for Model3d {
         seed: u64,
         dir: &Path,
     ) -> Result<Vec<(String, String)>> {
-        let Some((campaign, spec)) = &self.files else {
+        let Some(files) = &self.files else {
             return Ok(Vec::new());
         };
         let (terrain, sim, zones) = self.realize(candidate)?;
-        let text =
-            scenario_file::rigid_body_scenario(dir, campaign, spec, &terrain.materials, zones, sim, repeats, seed)?;
+        let text = scenario_file::rigid_body_scenario(
+            dir,
+            &files.campaign_dir,
+            &files.spec,
+            &terrain.materials,
+            zones,
+            sim,
+            repeats,
+            seed,
+        )?;
         Ok(vec![(scenario_file::RUN_SCENARIO.to_string(), text)])
     }
 }
@@ -760,7 +796,8 @@ mod tests {
     fn the_calibrated_scenario_runs_the_calibrated_model() {
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/tschamut2014");
         let mut cfg = CalibrationConfig::default();
-        cfg.terrain.level_beyond = Some(vec![[-40.0, 130.0], [185.0, 130.0], [185.0, 320.0], [-40.0, 320.0]]);
+        cfg.terrain.level_beyond =
+            Some(LevelBeyond::Polygon(vec![[-40.0, 130.0], [185.0, 130.0], [185.0, 320.0], [-40.0, 320.0]]));
         let campaign = Campaign::read(&dir).unwrap();
         let (runs, groups) = field_runs(&campaign, cfg.group_link_m).unwrap();
         let model = Model3d::new(&campaign, runs, groups, &dir.join("terrain_proxy.asc"), &cfg, "test").unwrap();

@@ -102,6 +102,10 @@ pub struct Report {
     /// What reading the inputs noticed ([`super::Model::input_notes`]), as `talus run` warns.
     #[serde(default)]
     pub warnings: Vec<String>,
+    /// The polygon past which this calibration levelled the ground, where the settings say `[terrain] level_beyond
+    /// = "field"` ([`field_box_m`] of its own runs); `None` otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub levelled_beyond_m: Option<Vec<[f64; 2]>>,
     /// Runs whose baseline simulations all end at their release while the field rock ran
     /// ([`super::runs::runs_not_started`]).
     #[serde(default)]
@@ -684,6 +688,9 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
     for w in &r.warnings {
         let _ = writeln!(s, "**Warning:** {w}\n");
     }
+    if let Some(p) = &r.levelled_beyond_m {
+        let _ = writeln!(s, "**Ground:** {}.\n", levelled_note(p));
+    }
     for [a, b] in &r.duplicate_runs {
         let _ = writeln!(
             s,
@@ -1017,13 +1024,32 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
 /// that a rock the model sends a little past the longest field run still meets ground it can stop on).
 pub const FIELD_BOX_MARGIN_M: f64 = 10.0;
 
-/// The horizontal box `[x0, y0, x1, y1]` around the release and rest points of runs `which`, widened by
-/// [`FIELD_BOX_MARGIN_M`]: where the field says the ground is, for the `level_beyond` a warning suggests. Only
-/// calibration runs go in: held-out runs choose no setting.
-pub fn field_box_m(runs: &[FieldRun], which: &[usize]) -> [f64; 4] {
-    let [x0, y0, x1, y1] = crate::terrain::bbox_xy(which.iter().flat_map(|&i| [runs[i].release_m, runs[i].rest_m]));
+/// The polygon around every run's release point and the rest points of calibration runs `cal`, widened by
+/// [`FIELD_BOX_MARGIN_M`] (a box, corners counter-clockwise from the lowest x and y): where the field says the
+/// ground is, for `[terrain] level_beyond`. The rest points are outcomes, so only calibration runs' go in: held-out
+/// runs choose no setting. The release points are where each run starts, known before its rock falls, and a held-out
+/// run must start on the ground as surveyed.
+pub fn field_box_m(runs: &[FieldRun], cal: &[usize]) -> Vec<[f64; 2]> {
+    let points = runs.iter().map(|r| r.release_m).chain(cal.iter().map(|&i| runs[i].rest_m));
+    let [x0, y0, x1, y1] = crate::terrain::bbox_xy(points);
     let m = FIELD_BOX_MARGIN_M;
-    [x0 - m, y0 - m, x1 + m, y1 + m]
+    let [x0, y0, x1, y1] = [x0 - m, y0 - m, x1 + m, y1 + m];
+    vec![[x0, y0], [x1, y0], [x1, y1], [x0, y1]]
+}
+
+/// A polygon as a settings file writes it, to 0.1 m.
+fn polygon_toml(p: &[[f64; 2]]) -> String {
+    let corners: Vec<String> = p.iter().map(|[x, y]| format!("[{x:.1}, {y:.1}]")).collect();
+    format!("[{}]", corners.join(", "))
+}
+
+/// What a calibration with `[terrain] level_beyond = "field"` says of the ground it levelled past `polygon`.
+pub fn levelled_note(polygon: &[[f64; 2]]) -> String {
+    format!(
+        "the ground is levelled past {} (`[terrain] level_beyond = \"field\"`: the runs' release points and the \
+         calibration runs' rest points, widened by {FIELD_BOX_MARGIN_M:.0} m)",
+        polygon_toml(polygon)
+    )
 }
 
 /// Share of a model's simulations of the calibration runs not at rest above which the report warns (ours).
@@ -1034,9 +1060,9 @@ pub const UNRESTED_WARNING_SHARE: f64 = 0.1;
 /// both shares are at most [`UNRESTED_WARNING_SHARE`]. Such a run-out is taken where the rock left the terrain or
 /// stood at the time limit, short of where it would stop, so the fit and its errors say less about where rocks stop.
 /// The remedy it names follows how they ended: a larger terrain for those that left it, a longer time for the rest.
-/// `field_box_m` ([`field_box_m`]; `[x0, y0, x1, y1]`, given where `[terrain] level_beyond` could help) is written
-/// out as the `level_beyond` polygon that levels the ground past it.
-pub fn unrested_warning(baseline: &Metrics, final_model: &Metrics, field_box_m: Option<[f64; 4]>) -> Option<String> {
+/// `field_box_m` ([`field_box_m`], given where `[terrain] level_beyond` could help) is written out as the
+/// `level_beyond` polygon that levels the ground past it, beside `"field"`, which levels past each calibration's own.
+pub fn unrested_warning(baseline: &Metrics, final_model: &Metrics, field_box_m: Option<&[[f64; 2]]>) -> Option<String> {
     let (b, f) = (baseline.not_stopped_fraction, final_model.not_stopped_fraction);
     let (b_left, f_left) = (baseline.left_terrain_fraction, final_model.left_terrain_fraction);
     (b.max(f) > UNRESTED_WARNING_SHARE).then(|| {
@@ -1047,11 +1073,13 @@ pub fn unrested_warning(baseline: &Metrics, final_model: &Metrics, field_box_m: 
             how.push(format!("{:.0} % and {:.0} % left the terrain", 100.0 * b_left, 100.0 * f_left));
             remedies.push(match field_box_m {
                 None => "extend the terrain beyond the field's rest points".to_string(),
-                Some([x0, y0, x1, y1]) => format!(
+                Some(p) => format!(
                     "extend the terrain beyond the field's rest points (where the ground past the field's data is a \
-                     DEM's extrapolated margin, not surveyed, `[terrain] level_beyond = [[{x0:.1}, {y0:.1}], \
-                     [{x1:.1}, {y0:.1}], [{x1:.1}, {y1:.1}], [{x0:.1}, {y1:.1}]]` in the settings file continues it \
-                     level past the calibration runs' release and rest points, widened by {FIELD_BOX_MARGIN_M:.0} m)"
+                     DEM's extrapolated margin, not surveyed, `[terrain] level_beyond = {}` in the settings file \
+                     continues it level past the runs' release points and the calibration runs' rest points, widened \
+                     by {FIELD_BOX_MARGIN_M:.0} m; `level_beyond = \"field\"` levels past that box as each \
+                     calibration, each fold of `--kfold`, draws it from its own runs)",
+                    polygon_toml(p)
                 ),
             });
         }
@@ -1094,25 +1122,30 @@ mod tests {
         let w = unrested_warning(&m(0.3, 0.1), &m(0.3, 0.1), None).unwrap();
         assert!(w.contains("left the terrain; 20 % and 20 % ran to") && w.contains("rest points, or raise"), "{w}");
         // Where levelling could help, the polygon to paste, and only where rocks left the terrain.
-        let field = Some([-3.0, 120.5, 136.44, 270.0]);
+        let field = [[-3.0, 120.5], [136.44, 120.5], [136.44, 270.0], [-3.0, 270.0]];
+        let field = Some(&field[..]);
         let w = unrested_warning(&m(0.14, 0.14), &m(0.14, 0.14), field).unwrap();
         let polygon = "`[terrain] level_beyond = [[-3.0, 120.5], [136.4, 120.5], [136.4, 270.0], [-3.0, 270.0]]`";
-        assert!(w.contains(polygon) && w.ends_with("widened by 10 m)"), "{w}");
+        assert!(w.contains(polygon) && w.contains("widened by 10 m; `level_beyond = \"field\"`"), "{w}");
+        assert!(w.ends_with("each fold of `--kfold`, draws it from its own runs)"), "{w}");
         let w = unrested_warning(&m(0.2, 0.0), &m(0.2, 0.0), field).unwrap();
         assert!(!w.contains("level_beyond"), "{w}");
     }
 
     #[test]
-    fn the_field_box_holds_the_calibration_runs_release_and_rest_points_and_a_margin() {
+    fn the_field_box_holds_the_release_points_the_calibration_runs_rest_points_and_a_margin() {
         let at = |release: [f64; 2], rest: [f64; 2]| FieldRun {
             release_m: [release[0], release[1], 50.0],
             rest_m: [rest[0], rest[1], 0.0],
             ..run(0, 0, 10.0)
         };
         let runs =
-            [at([30.0, 250.0], [90.0, 140.0]), at([10.0, 230.0], [120.0, 160.0]), at([0.0, 0.0], [500.0, 500.0])];
-        // The third run is held out: it sets nothing.
-        assert_eq!(field_box_m(&runs, &[0, 1]), [0.0, 130.0, 130.0, 260.0]);
+            [at([30.0, 250.0], [90.0, 140.0]), at([10.0, 230.0], [120.0, 160.0]), at([20.0, 245.0], [500.0, 500.0])];
+        // The third run is held out: its rest point sets nothing; its release point lies inside.
+        assert_eq!(field_box_m(&runs, &[0, 1]), [[0.0, 130.0], [130.0, 130.0], [130.0, 260.0], [0.0, 260.0]]);
+        // A held-out release point outside stays on the ground as surveyed.
+        let runs = [runs[0].clone(), runs[1].clone(), at([140.0, 280.0], [500.0, 500.0])];
+        assert_eq!(field_box_m(&runs, &[0, 1]), [[0.0, 130.0], [150.0, 130.0], [150.0, 290.0], [0.0, 290.0]]);
     }
 
     #[test]
