@@ -1268,7 +1268,7 @@ fn level_beyond_field_levels_the_ground_past_each_calibrations_own_runs() {
     let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, cfg.group_link_m).unwrap();
     let model = Model3d::new(&campaign, runs, groups, &dir.join("terrain_proxy.asc"), &cfg, "test").unwrap();
     let (cal, hold) = split::seeded_split(model.runs(), 0.25, 1);
-    let polygon = field_box_m(model.runs(), &cal);
+    let polygon = field_box_m(model.runs(), &cal, cfg.terrain.up);
     let [x0, y0] = polygon[0];
     let [x1, y1] = polygon[2];
     let levelled = model.relevelled(&cfg, polygon.clone()).unwrap().unwrap();
@@ -1287,7 +1287,7 @@ fn level_beyond_field_levels_the_ground_past_each_calibrations_own_runs() {
     let out = tempfile::tempdir().unwrap();
     let (cal, hold) = (&cal[..12], &hold[..4]);
     let r = calibrate(&model, &cfg, cal, hold, "seeded", Some(out.path()), &quiet).unwrap().report;
-    let own = field_box_m(model.runs(), cal);
+    let own = field_box_m(model.runs(), cal, cfg.terrain.up);
     assert_ne!(own, polygon, "twelve runs draw another box");
     assert_eq!(r.levelled_beyond_m.as_ref(), Some(&own));
     let md = std::fs::read_to_string(out.path().join("report.md")).unwrap();

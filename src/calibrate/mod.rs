@@ -145,7 +145,7 @@ pub fn calibrate(
     // `level_beyond = "field"`: the ground levelled past this calibration's own field box.
     let relevelled = match cfg.terrain.level_beyond {
         Some(config::LevelBeyond::Field) => {
-            let polygon = report::field_box_m(model.runs(), cal);
+            let polygon = report::field_box_m(model.runs(), cal, cfg.terrain.up);
             let m = model.relevelled(cfg, polygon.clone())?;
             log(&match m {
                 Some(_) => report::levelled_note(&polygon),
@@ -385,7 +385,7 @@ pub fn calibrate(
     };
     // Levelling past the field's points is suggested where the settings could level and do not.
     let field_box = (model.levelled_by_settings() && cfg.terrain.level_beyond.is_none())
-        .then(|| report::field_box_m(model.runs(), cal));
+        .then(|| report::field_box_m(model.runs(), cal, cfg.terrain.up));
     if let Some(w) =
         report::unrested_warning(&report.baseline.calibration, &report.final_stage.calibration, field_box.as_deref())
     {

@@ -17,6 +17,7 @@ use crate::render::colormap::CATEGORICAL;
 use crate::render::{
     histogram_chart, render_map, write_svg, Chart, Colormap, MapLayer, OverlayLine, Overlays, Series, SeriesStyle,
 };
+use crate::terrain::UpAxis;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -1025,13 +1026,13 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
 pub const FIELD_BOX_MARGIN_M: f64 = 10.0;
 
 /// The polygon around every run's release point and the rest points of calibration runs `cal`, widened by
-/// [`FIELD_BOX_MARGIN_M`] (a box, corners counter-clockwise from the lowest x and y): where the field says the
-/// ground is, for `[terrain] level_beyond`. The rest points are outcomes, so only calibration runs' go in: held-out
+/// [`FIELD_BOX_MARGIN_M`] (a box in the files' horizontal axes for `up`, corners counter-clockwise from the lowest):
+/// where the field says the ground is, for `[terrain] level_beyond`. The rest points are outcomes, so only calibration runs' go in: held-out
 /// runs choose no setting. The release points are where each run starts, known before its rock falls, and a held-out
 /// run must start on the ground as surveyed.
-pub fn field_box_m(runs: &[FieldRun], cal: &[usize]) -> Vec<[f64; 2]> {
+pub fn field_box_m(runs: &[FieldRun], cal: &[usize], up: UpAxis) -> Vec<[f64; 2]> {
     let points = runs.iter().map(|r| r.release_m).chain(cal.iter().map(|&i| runs[i].rest_m));
-    let [x0, y0, x1, y1] = crate::terrain::bbox_xy(points);
+    let [x0, y0, x1, y1] = crate::terrain::bbox_xy(points.map(|p| up.horizontal(p)));
     let m = FIELD_BOX_MARGIN_M;
     let [x0, y0, x1, y1] = [x0 - m, y0 - m, x1 + m, y1 + m];
     vec![[x0, y0], [x1, y0], [x1, y1], [x0, y1]]
@@ -1142,10 +1143,19 @@ mod tests {
         let runs =
             [at([30.0, 250.0], [90.0, 140.0]), at([10.0, 230.0], [120.0, 160.0]), at([20.0, 245.0], [500.0, 500.0])];
         // The third run is held out: its rest point sets nothing; its release point lies inside.
-        assert_eq!(field_box_m(&runs, &[0, 1]), [[0.0, 130.0], [130.0, 130.0], [130.0, 260.0], [0.0, 260.0]]);
+        let box_m = [[0.0, 130.0], [130.0, 130.0], [130.0, 260.0], [0.0, 260.0]];
+        assert_eq!(field_box_m(&runs, &[0, 1], UpAxis::Z), box_m);
         // A held-out release point outside stays on the ground as surveyed.
         let runs = [runs[0].clone(), runs[1].clone(), at([140.0, 280.0], [500.0, 500.0])];
-        assert_eq!(field_box_m(&runs, &[0, 1]), [[0.0, 130.0], [150.0, 130.0], [150.0, 290.0], [0.0, 290.0]]);
+        let box_m = [[0.0, 130.0], [150.0, 130.0], [150.0, 290.0], [0.0, 290.0]];
+        assert_eq!(field_box_m(&runs, &[0, 1], UpAxis::Z), box_m);
+        // A y-up campaign's horizontal axes are x and z, as its polygons are given.
+        let y_up = |p: [f64; 3]| [p[0], p[2], p[1]];
+        let runs: Vec<FieldRun> = runs
+            .iter()
+            .map(|r| FieldRun { release_m: y_up(r.release_m), rest_m: y_up(r.rest_m), ..r.clone() })
+            .collect();
+        assert_eq!(field_box_m(&runs, &[0, 1], UpAxis::Y), box_m);
     }
 
     #[test]

@@ -39,6 +39,15 @@ impl UpAxis {
         }
     }
 
+    /// The horizontal position of a file point as the user gives polygons: (x, y) for z-up files, (x, z) for y-up
+    /// ones ([`horizontal_to_local`]).
+    pub fn horizontal(self, p: [f64; 3]) -> [f64; 2] {
+        match self {
+            UpAxis::Z => [p[0], p[1]],
+            UpAxis::Y => [p[0], p[2]],
+        }
+    }
+
     /// talus z-up axes back to the file's axes.
     pub fn to_file(self, v: &Vector3<f64>) -> [f64; 3] {
         match self {
