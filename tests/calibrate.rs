@@ -23,6 +23,7 @@ use talus::calibrate::{base_candidate, calibrate, split, Model};
 use talus::campaign::{Campaign, Ground};
 use talus::lumped2d::Options2d;
 use talus::sim::SimParams;
+use talus::terrain::UpAxis;
 
 fn quiet(_: &str) {}
 
@@ -713,7 +714,7 @@ fn the_tschamut_campaign_holds_one_duplicated_record() {
     use talus::calibrate::runs::{duplicate_runs, field_runs};
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("meshes/tschamut2014");
     let campaign = talus::campaign::Campaign::read(&dir).unwrap();
-    let (mut runs, _) = field_runs(&campaign, 100.0).unwrap();
+    let (mut runs, _) = field_runs(&campaign, 100.0, UpAxis::Z).unwrap();
     // v033 and v034 agree in every column of both files (release, velocity, rest).
     assert_eq!(duplicate_runs(&runs), vec![["v033".to_string(), "v034".to_string()]]);
     // The copies are never on both sides: same fold in the 5-fold and the loop's inner folds, for any seed.
@@ -1265,7 +1266,7 @@ fn level_beyond_field_levels_the_ground_past_each_calibrations_own_runs() {
     cfg.effects.max_rounds = 0;
     cfg.back_analysis.enabled = false;
     let campaign = Campaign::read_on(&dir, Ground::Terrain).unwrap();
-    let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, cfg.group_link_m).unwrap();
+    let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, cfg.group_link_m, UpAxis::Z).unwrap();
     let model = Model3d::new(&campaign, runs, groups, &dir.join("terrain_proxy.asc"), &cfg, "test").unwrap();
     let (cal, hold) = split::seeded_split(model.runs(), 0.25, 1);
     let polygon = field_box_m(model.runs(), &cal, cfg.terrain.up);
@@ -1296,6 +1297,103 @@ fn level_beyond_field_levels_the_ground_past_each_calibrations_own_runs() {
     assert!(scenario.contains("level_beyond"), "{scenario}");
     // No warning suggests a polygon to a calibration that levelled.
     assert!(r.warnings.iter().all(|w| !w.contains("level_beyond = [[")), "{:?}", r.warnings);
+}
+
+/// `text` (a campaign CSV or an OBJ) with every point (x, y, z) and velocity written as (x, z, −y): the same world in
+/// a y-up file, which talus turns back to (x, y, z) exactly.
+fn as_y_up(text: &str, obj: bool) -> String {
+    let neg = |v: &str| v.strip_prefix('-').map_or(format!("-{v}"), str::to_string);
+    let turn = |f: &mut Vec<String>, [_, y, z]: [usize; 3]| {
+        let (old_y, old_z) = (f[y].clone(), f[z].clone());
+        (f[y], f[z]) = (old_z, neg(&old_y));
+    };
+    if obj {
+        let line = |l: &str| match l.strip_prefix("v ") {
+            Some(rest) => {
+                let mut f: Vec<String> = rest.split_whitespace().map(str::to_string).collect();
+                turn(&mut f, [0, 1, 2]);
+                format!("v {}", f.join(" "))
+            }
+            None => l.to_string(),
+        };
+        return text.lines().map(line).collect::<Vec<_>>().join("\n") + "\n";
+    }
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name);
+    let triples: Vec<[usize; 3]> = [["x_m", "y_m", "z_m"], ["vx_mps", "vy_mps", "vz_mps"]]
+        .iter()
+        .filter_map(|t| Some([col(t[0])?, col(t[1])?, col(t[2])?]))
+        .collect();
+    let mut out = vec![header.join(",")];
+    for l in lines {
+        let mut f: Vec<String> = l.split(',').map(str::to_string).collect();
+        for t in &triples {
+            turn(&mut f, *t);
+        }
+        out.push(f.join(","));
+    }
+    out.join("\n") + "\n"
+}
+
+#[test]
+fn a_y_up_campaign_calibrates_as_the_same_campaign_z_up() {
+    // A tracked synthetic campaign written z-up, and again y-up (every point and velocity as (x, z, −y), the terrain
+    // too): talus reads both into the same world, so the runs, the simulations and every metric agree to the bit,
+    // the rest-point error and the levelled ground included, and the y-up calibration's polygon is in its files'
+    // x and z. (Horizontal readings once took a y-up file's y, its height, for a horizontal axis.)
+    let spec = Synthetic3d { runs_per_group: 2, track_noise_m: Some(0.0), ..case_3d("speed_tracked", 1).unwrap() };
+    let dir = tempfile::tempdir().unwrap();
+    let (z_dir, y_dir) = (dir.path().join("z_up"), dir.path().join("y_up"));
+    talus::calibrate::synthetic::write_terrain_campaign(&spec, &z_dir, 0.0, &SimParams::default()).unwrap();
+    std::fs::create_dir_all(&y_dir).unwrap();
+    for entry in std::fs::read_dir(&z_dir).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_str().unwrap().to_string();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let turned = match name.as_str() {
+            "terrain.obj" => as_y_up(&text, true),
+            "release_points.csv" | "observed_deposition.csv" | "observed_trajectories.csv" => as_y_up(&text, false),
+            _ => text,
+        };
+        std::fs::write(y_dir.join(&name), turned).unwrap();
+    }
+    let mut cfg = CalibrationConfig { repeats: 3, search_repeats: 1, max_evaluations: Some(3), ..Default::default() };
+    cfg.effects.max_rounds = 0;
+    cfg.back_analysis.enabled = false;
+    cfg.terrain.level_beyond = Some(LevelBeyond::Field);
+    let y_cfg = CalibrationConfig {
+        terrain: talus::calibrate::config::TerrainMap { up: UpAxis::Y, ..cfg.terrain.clone() },
+        ..cfg.clone()
+    };
+    let open = |d: &std::path::Path, c: &CalibrationConfig| {
+        talus::calibrate::open_model(d, &d.join("terrain.obj"), ModelKind::Rigid3d, c, "test").unwrap()
+    };
+    let (z_model, y_model) = (open(&z_dir, &cfg), open(&y_dir, &y_cfg));
+    // The same runs, tracks and bounces read from them (compared as printed: a bounce may hold a NaN; a spin of 0
+    // turned may be −0).
+    let printed = |m: &dyn Model| {
+        let runs = m
+            .runs()
+            .iter()
+            .map(|r| talus::calibrate::runs::FieldRun { spin_radps: r.spin_radps.map(|w| w + 0.0), ..r.clone() });
+        format!("{:?}", runs.collect::<Vec<_>>())
+    };
+    assert_eq!(printed(z_model.as_ref()), printed(y_model.as_ref()));
+    let (cal, hold) = split::seeded_split(z_model.runs(), 0.25, 1);
+    let z = calibrate(z_model.as_ref(), &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report;
+    let y = calibrate(y_model.as_ref(), &y_cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report;
+    for (a, b) in [(&z.baseline.calibration, &y.baseline.calibration), (&z.baseline.holdout, &y.baseline.holdout)] {
+        assert_eq!(serde_json::to_value(a).unwrap(), serde_json::to_value(b).unwrap());
+    }
+    assert!(z.baseline.holdout.endpoint_mae_m > 0.0);
+    let flip = |p: &Vec<[f64; 2]>| p.iter().map(|&[x, y]| [x, -y]).collect::<Vec<_>>();
+    let (z_box, y_box) = (z.levelled_beyond_m.unwrap(), y.levelled_beyond_m.unwrap());
+    let sorted = |mut p: Vec<[f64; 2]>| {
+        p.sort_by(|a, b| a.partial_cmp(b).unwrap());
+        p
+    };
+    assert_eq!(sorted(flip(&z_box)), sorted(y_box));
 }
 
 #[test]
@@ -1515,7 +1613,7 @@ fn an_effect_arm_fitted_again_leaves_the_valley_of_the_fit_without_it() {
             effects: EffectsConfig { fit_arms: Some(fit_arms), ..Default::default() },
             ..Default::default()
         };
-        let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, cfg.group_link_m).unwrap();
+        let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, cfg.group_link_m, UpAxis::Z).unwrap();
         let profile = dir.path().join("profile.csv");
         let model = talus::calibrate::model2d::Model2d::new(&campaign, runs, groups, &profile, &cfg).unwrap();
         let (cal, hold) = split::seeded_split(model.runs(), cfg.holdout_fraction, cfg.seed);
@@ -1534,7 +1632,7 @@ fn an_effect_arm_fitted_again_leaves_the_valley_of_the_fit_without_it() {
 fn shipped_tracked_profile(cfg: &CalibrationConfig) -> talus::calibrate::model2d::Model2d {
     let shipped = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/profile_campaign_tracked");
     let campaign = talus::campaign::Campaign::read(&shipped).unwrap();
-    let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, 20.0).unwrap();
+    let (runs, groups) = talus::calibrate::runs::field_runs(&campaign, 20.0, UpAxis::Z).unwrap();
     talus::calibrate::model2d::Model2d::new(&campaign, runs, groups, &shipped.join("profile.csv"), cfg).unwrap()
 }
 

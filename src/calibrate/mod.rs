@@ -69,7 +69,11 @@ pub fn open_model(
         ModelKind::Lumped2d => Ground::Profile,
     };
     let campaign = Campaign::read_on(campaign_dir, ground)?;
-    let (runs, groups) = runs::field_runs(&campaign, cfg.group_link_m)?;
+    let up = match kind {
+        ModelKind::Rigid3d => cfg.terrain.up,
+        ModelKind::Lumped2d => crate::terrain::UpAxis::Z,
+    };
+    let (runs, groups) = runs::field_runs(&campaign, cfg.group_link_m, up)?;
     let model: Box<dyn Model> = match kind {
         ModelKind::Rigid3d => Box::new(model3d::Model3d::new(&campaign, runs, groups, terrain_file, cfg, source)?),
         ModelKind::Lumped2d => Box::new(model2d::Model2d::new(&campaign, runs, groups, terrain_file, cfg)?),

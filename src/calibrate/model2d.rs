@@ -606,7 +606,7 @@ mod tests {
         }
         std::fs::write(dir.path().join("observed_trajectories.csv"), track).unwrap();
         let campaign = Campaign::read(dir.path()).unwrap();
-        let (runs, groups) = crate::calibrate::runs::field_runs(&campaign, 2.0).unwrap();
+        let (runs, groups) = crate::calibrate::runs::field_runs(&campaign, 2.0, crate::terrain::UpAxis::Z).unwrap();
         let cfg = CalibrationConfig::default();
         let model = Model2d::new(&campaign, runs, groups, &dir.path().join("profile.csv"), &cfg).unwrap();
         let observed: Vec<Option<f64>> = model.runs().iter().map(|r| r.rebound_height_m).collect();

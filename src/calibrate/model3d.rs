@@ -18,7 +18,7 @@ use crate::rock::RockBody;
 use crate::scenario::{MaterialsBy, TerrainSpec, ZoneSpec};
 use crate::sim::{simulate, Impact, Observer, Sample, SimParams, StopReason};
 use crate::source::measured_release;
-use crate::terrain::{horizontal_to_local, Material, Terrain, UpAxis};
+use crate::terrain::{Material, Terrain, UpAxis};
 use nalgebra::Vector3;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -64,8 +64,8 @@ fn terrain_extent(terrain: &Terrain) -> String {
 }
 
 impl Model3d {
-    /// Reads the terrain file and builds the blocks of `campaign` for its `runs`. `source` names the settings
-    /// file in errors. A release not over the terrain or more than a metre below it, and a rest point not over it,
+    /// Reads the terrain file and builds the blocks of `campaign` for its `runs` (in the model's frame:
+    /// [`super::runs::field_runs`] with the settings' up axis). `source` names the settings file in errors. A release not over the terrain or more than a metre below it, and a rest point not over it,
     /// are refused ([`Campaign::check_release_points`], [`Campaign::check_rest_points`]).
     pub fn new(
         campaign: &Campaign,
@@ -127,14 +127,14 @@ impl Model3d {
         let ground = terrain_extent(&terrain);
         let high = campaign.check_release_points(
             |p| {
-                let q = to_local(&terrain, p);
+                let q = file_to_local(&terrain, p);
                 terrain.surface.height(q.x, q.y).map(|z| q.z - z)
             },
             &ground,
         )?;
         campaign.check_rest_points(
             |p| {
-                let q = to_local(&terrain, p);
+                let q = file_to_local(&terrain, p);
                 terrain.surface.at(q.x, q.y).is_some()
             },
             &ground,
@@ -143,14 +143,23 @@ impl Model3d {
         for (id, block) in &campaign.blocks {
             bodies.insert(id.clone(), campaign.body(block)?);
         }
+        // The tracks in the runs' frame, talus's z-up axes, as the engine and every horizontal reading take them.
+        let up = terrain.up;
+        let tracks: BTreeMap<String, Vec<TrackPoint>> = campaign
+            .tracks
+            .iter()
+            .map(|(id, track)| {
+                let model_frame =
+                    track.iter().map(|q| TrackPoint { position_m: up.to_internal(q.position_m).into(), ..*q });
+                (id.clone(), model_frame.collect())
+            })
+            .collect();
         let mut model = Self::from_parts(runs, groups, terrain, bodies, cfg.simulation.clone(), dem)?
             .with_release_attempts(cfg.release_attempts)
             .with_rest_noise(cfg.rest_noise_m);
         model.files = Some(Files { campaign_dir: campaign.dir.clone(), spec, source: source.to_string() });
         model.notes.extend(campaign.unobserved_note().into_iter().chain(high));
-        Ok(model
-            .with_tracks(&campaign.tracks, cfg.track_noise_m)?
-            .with_bounce_reads(cfg.bounce_weight.is_some_and(|w| w > 0.0)))
+        Ok(model.with_tracks(&tracks, cfg.track_noise_m)?.with_bounce_reads(cfg.bounce_weight.is_some_and(|w| w > 0.0)))
     }
 
     /// The model reading the bounces of the simulated paths of runs whose tracks show bounces with a tangential
@@ -236,7 +245,7 @@ impl Model3d {
     }
 
     /// The model read again from its files with the ground levelled past `polygon` (`[terrain] level_beyond`, x, y
-    /// in the terrain file's horizontal frame), for the same runs in the same order; `None` for a model built from
+    /// in the terrain file's horizontal axes), for the same runs in the same order; `None` for a model built from
     /// parts, whose ground no settings shape.
     ///
     /// # Errors
@@ -458,11 +467,13 @@ impl Model3d {
                             "this is a bug in the calibration: please report it",
                         ));
                     };
-                    zones.push(ZoneSpec { material: e.label.clone(), polygon: polygon.clone() });
+                    // The scenario's zone in the files' horizontal axes, as a user gives polygons.
+                    let files_polygon = polygon.iter().map(|&[x, y]| terrain.up.horizontal_of_internal(x, y));
+                    zones.push(ZoneSpec { material: e.label.clone(), polygon: files_polygon.collect() });
                     terrain.materials.push(Self::material(p, &e.label, &e.label, m)?);
                     // As a scenario's [[terrain.zones]]: the zone ends exactly on its polygon.
-                    let local: Vec<[f64; 2]> =
-                        polygon.iter().map(|q| horizontal_to_local(terrain.up, &terrain.origin, *q)).collect();
+                    let o = terrain.origin;
+                    let local: Vec<[f64; 2]> = polygon.iter().map(|q| [q[0] - o.x, q[1] - o.y]).collect();
                     terrain.paint_zone(&local, (terrain.materials.len() - 1) as u16)?;
                 }
                 EffectKind::CrspRotation => {
@@ -491,13 +502,24 @@ impl Model3d {
     }
 }
 
-/// A point of the campaign's frame in `terrain`'s local frame.
+/// A point of the model's frame (talus's z-up axes: the campaign's, turned for y-up files) in `terrain`'s local
+/// frame.
 fn to_local(terrain: &Terrain, p: [f64; 3]) -> Vector3<f64> {
+    Vector3::from(p) - terrain.origin
+}
+
+/// A point of `terrain`'s local frame in the model's frame.
+fn to_model(terrain: &Terrain, local: &Vector3<f64>) -> [f64; 3] {
+    (local + terrain.origin).into()
+}
+
+/// A point of the campaign's files in `terrain`'s local frame.
+fn file_to_local(terrain: &Terrain, p: [f64; 3]) -> Vector3<f64> {
     terrain.up.to_internal(p) - terrain.origin
 }
 
-/// The bounces of `track` (campaign frame) over `terrain` ([`read_impacts`], read in the local frame, each
-/// bounce's position given back in the campaign's).
+/// The bounces of `track` (model frame) over `terrain` ([`read_impacts`], read in the local frame, each bounce's
+/// position given back in the model's).
 fn terrain_impacts(terrain: &Terrain, track: &[TrackPoint], noise_m: f64) -> Vec<super::impacts::Impact> {
     let local: Vec<TrackPoint> = track
         .iter()
@@ -549,7 +571,7 @@ impl Observer for PathRecorder3d<'_> {
     fn sample(&mut self, s: &Sample) {
         let Some((t0, p0, v0)) = self.last else {
             self.start_s = s.t_s;
-            self.points.push(TrackPoint { time_s: s.t_s, position_m: self.terrain.to_file_frame(&s.position_m) });
+            self.points.push(TrackPoint { time_s: s.t_s, position_m: to_model(self.terrain, &s.position_m) });
             self.last = Some((s.t_s, s.position_m, s.velocity_mps));
             return;
         };
@@ -567,7 +589,7 @@ impl Observer for PathRecorder3d<'_> {
             } else {
                 p0 + (s.position_m - p0) * (tau / (s.t_s - t0))
             };
-            self.points.push(TrackPoint { time_s: t, position_m: self.terrain.to_file_frame(&p) });
+            self.points.push(TrackPoint { time_s: t, position_m: to_model(self.terrain, &p) });
         }
         self.last = Some((s.t_s, s.position_m, s.velocity_mps));
     }
@@ -600,8 +622,7 @@ impl Prepared3d<'_> {
         let body = &model.bodies[&run.block_id];
         let mut rng = stream(seed, super::model::stream_index(run.index, repeat));
         let p = to_local(&model.terrain, run.release_m);
-        let v = terrain.up.to_internal(run.velocity_mps);
-        let w = terrain.up.to_internal(run.spin_radps);
+        let (v, w) = (run.velocity_mps.into(), run.spin_radps.into());
         let start = measured_release(terrain, body, p, v, w, &mut rng);
         let meter =
             self.model.reading.rebounds.then(|| rebound_meter(self.model.reading.track_noise_m, run, repeat, seed));
@@ -609,7 +630,6 @@ impl Prepared3d<'_> {
         let out = simulate(terrain, body, start, &self.sim, &mut rng, &mut (&mut obs, extra));
         let end = out.final_state.position_m;
         let d = end - start.position_m;
-        let file_end = terrain.to_file_frame(&end);
         let o = terrain.origin;
         let path = obs.thinner.finish(end.x + o.x, end.y + o.y);
         let mut summary = obs.summary;
@@ -633,7 +653,7 @@ impl Prepared3d<'_> {
             terrain.surface.at(end.x, end.y).map(|g| slope_deg(&g.normal)).unwrap_or(summary.slope_mean_deg);
         Sim {
             runout_m: d.x.hypot(d.y),
-            rest_m: file_end,
+            rest_m: to_model(terrain, &end),
             end: match out.stop_reason {
                 // A calibration places no barrier; one that caught the rock would have stopped it.
                 StopReason::Stopped | StopReason::Barrier => SimEnd::Rest,
@@ -740,7 +760,7 @@ mod tests {
         let terrain_file = shipped.join("terrain_proxy.asc");
         let cfg = CalibrationConfig::default();
         let campaign = Campaign::read(dir.path()).unwrap();
-        let (runs, groups) = field_runs(&campaign, cfg.group_link_m).unwrap();
+        let (runs, groups) = field_runs(&campaign, cfg.group_link_m, UpAxis::Z).unwrap();
         let untracked = Model3d::new(&campaign, runs, groups, &terrain_file, &cfg, "test").unwrap();
         let first = &untracked.runs()[0];
         let [x0, y0, _] = first.release_m;
@@ -755,7 +775,7 @@ mod tests {
         }
         std::fs::write(dir.path().join("observed_trajectories.csv"), track).unwrap();
         let campaign = Campaign::read(dir.path()).unwrap();
-        let (runs, groups) = field_runs(&campaign, cfg.group_link_m).unwrap();
+        let (runs, groups) = field_runs(&campaign, cfg.group_link_m, UpAxis::Z).unwrap();
         let model = Model3d::new(&campaign, runs, groups, &terrain_file, &cfg, "test").unwrap();
         let run = &model.runs()[0];
         assert!((run.rebound_height_m.unwrap() - 1.5).abs() < 1e-6, "{:?}", run.rebound_height_m);
@@ -769,7 +789,7 @@ mod tests {
         // With the tracking noise declared (here 0) a simulated path is read at the track's four times only: it
         // never rebounds higher than read at every sample, and the simulation itself is unchanged.
         let read_cfg = CalibrationConfig { track_noise_m: Some(0.0), ..cfg.clone() };
-        let (runs, groups) = field_runs(&campaign, cfg.group_link_m).unwrap();
+        let (runs, groups) = field_runs(&campaign, cfg.group_link_m, UpAxis::Z).unwrap();
         let read = Model3d::new(&campaign, runs, groups, &terrain_file, &read_cfg, "test").unwrap();
         let (every, at_times) = (model.prepare(&c).unwrap(), read.prepare(&c).unwrap());
         let mut lower = 0;
@@ -784,7 +804,7 @@ mod tests {
         let no_y = format!("trajectory_id,time_s,x_m,z_m\n{0},0,{x0},1500\n{0},1,{x0},1490\n", first.id);
         std::fs::write(dir.path().join("observed_trajectories.csv"), no_y).unwrap();
         let campaign = Campaign::read(dir.path()).unwrap();
-        let (runs, groups) = field_runs(&campaign, cfg.group_link_m).unwrap();
+        let (runs, groups) = field_runs(&campaign, cfg.group_link_m, UpAxis::Z).unwrap();
         let e = Model3d::new(&campaign, runs, groups, &terrain_file, &cfg, "test").unwrap_err().to_string();
         assert!(e.contains("observed_trajectories.csv, run") && e.contains("y_m"), "{e}");
     }
@@ -799,7 +819,7 @@ mod tests {
         cfg.terrain.level_beyond =
             Some(LevelBeyond::Polygon(vec![[-40.0, 130.0], [185.0, 130.0], [185.0, 320.0], [-40.0, 320.0]]));
         let campaign = Campaign::read(&dir).unwrap();
-        let (runs, groups) = field_runs(&campaign, cfg.group_link_m).unwrap();
+        let (runs, groups) = field_runs(&campaign, cfg.group_link_m, UpAxis::Z).unwrap();
         let model = Model3d::new(&campaign, runs, groups, &dir.join("terrain_proxy.asc"), &cfg, "test").unwrap();
         let (mut c, _) = base_candidate(&model, &cfg);
         c.params.set("default.cr_mean", 0.27);

@@ -1026,13 +1026,13 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
 pub const FIELD_BOX_MARGIN_M: f64 = 10.0;
 
 /// The polygon around every run's release point and the rest points of calibration runs `cal`, widened by
-/// [`FIELD_BOX_MARGIN_M`] (a box in the files' horizontal axes for `up`, corners counter-clockwise from the lowest):
+/// [`FIELD_BOX_MARGIN_M`] (a box in the horizontal axes of `up`'s files, corners counter-clockwise from the lowest):
 /// where the field says the ground is, for `[terrain] level_beyond`. The rest points are outcomes, so only calibration runs' go in: held-out
 /// runs choose no setting. The release points are where each run starts, known before its rock falls, and a held-out
 /// run must start on the ground as surveyed.
 pub fn field_box_m(runs: &[FieldRun], cal: &[usize], up: UpAxis) -> Vec<[f64; 2]> {
     let points = runs.iter().map(|r| r.release_m).chain(cal.iter().map(|&i| runs[i].rest_m));
-    let [x0, y0, x1, y1] = crate::terrain::bbox_xy(points.map(|p| up.horizontal(p)));
+    let [x0, y0, x1, y1] = crate::terrain::bbox_xy(points.map(|p| up.horizontal_of_internal(p[0], p[1])));
     let m = FIELD_BOX_MARGIN_M;
     let [x0, y0, x1, y1] = [x0 - m, y0 - m, x1 + m, y1 + m];
     vec![[x0, y0], [x1, y0], [x1, y1], [x0, y1]]
@@ -1149,13 +1149,9 @@ mod tests {
         let runs = [runs[0].clone(), runs[1].clone(), at([140.0, 280.0], [500.0, 500.0])];
         let box_m = [[0.0, 130.0], [150.0, 130.0], [150.0, 290.0], [0.0, 290.0]];
         assert_eq!(field_box_m(&runs, &[0, 1], UpAxis::Z), box_m);
-        // A y-up campaign's horizontal axes are x and z, as its polygons are given.
-        let y_up = |p: [f64; 3]| [p[0], p[2], p[1]];
-        let runs: Vec<FieldRun> = runs
-            .iter()
-            .map(|r| FieldRun { release_m: y_up(r.release_m), rest_m: y_up(r.rest_m), ..r.clone() })
-            .collect();
-        assert_eq!(field_box_m(&runs, &[0, 1], UpAxis::Y), box_m);
+        // For a y-up terrain the runs are in talus's axes (x, −z, y) and the polygon in the files' x and z.
+        let y_up = [[0.0, -290.0], [150.0, -290.0], [150.0, -130.0], [0.0, -130.0]];
+        assert_eq!(field_box_m(&runs, &[0, 1], UpAxis::Y), y_up);
     }
 
     #[test]

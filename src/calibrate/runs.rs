@@ -11,6 +11,7 @@
 use super::model::RunSims;
 use crate::campaign::Campaign;
 use crate::error::{Error, Result};
+use crate::terrain::UpAxis;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
@@ -28,7 +29,9 @@ pub struct FieldRun {
     pub mass_kg: f64,
     /// Block bounding sizes sorted longest first, m.
     pub size_m: [f64; 3],
-    /// Release position of the centre of mass (campaign frame), m.
+    /// Release position of the centre of mass, m, in the model's frame: the campaign's axes, but for a y-up terrain
+    /// ([`crate::terrain::UpAxis::Y`]) talus's z-up ones (x, −z, y), so that x, y are horizontal and z is up for
+    /// every model (so too the velocity, spin and rest position).
     pub release_m: [f64; 3],
     /// Initial velocity, m/s.
     pub velocity_mps: [f64; 3],
@@ -52,6 +55,17 @@ pub struct FieldRun {
 }
 
 impl FieldRun {
+    /// The run with its positions, velocity and spin given by `f` in other axes.
+    pub fn in_axes(&self, f: impl Fn([f64; 3]) -> [f64; 3]) -> FieldRun {
+        FieldRun {
+            release_m: f(self.release_m),
+            velocity_mps: f(self.velocity_mps),
+            spin_radps: f(self.spin_radps),
+            rest_m: f(self.rest_m),
+            ..self.clone()
+        }
+    }
+
     /// True if the run's track shows a bounce with a tangential restitution (the bounce score's,
     /// [`super::objective::bounce_crps`]).
     pub fn has_tangential_bounce(&self) -> bool {
@@ -84,27 +98,31 @@ impl FieldRun {
     }
 }
 
-/// The runs of a campaign that have an observed rest point, in file order, with their release groups.
-pub fn field_runs(campaign: &Campaign, group_link_m: f64) -> Result<(Vec<FieldRun>, ReleaseGroups)> {
+/// The runs of a campaign that have an observed rest point, in file order, with their release groups; in the model's
+/// frame for files whose up axis is `up` (z for profiles): [`FieldRun::release_m`].
+pub fn field_runs(campaign: &Campaign, group_link_m: f64, up: UpAxis) -> Result<(Vec<FieldRun>, ReleaseGroups)> {
     let mut runs = Vec::new();
     for (index, r) in campaign.releases.iter().enumerate() {
         let Some(dep) = campaign.depositions.get(&r.trajectory_id) else { continue };
         let block = &campaign.blocks[&r.block_id];
         let mut size = block.size_m;
         size.sort_by(|a, b| b.total_cmp(a));
-        runs.push(FieldRun {
-            id: r.trajectory_id.clone(),
-            index,
-            block_id: r.block_id.clone(),
-            mass_kg: block.mass_kg,
-            size_m: size,
-            release_m: r.position_m,
-            velocity_mps: r.velocity_mps,
-            spin_radps: r.spin_radps,
-            rest_m: dep.position_m,
-            runout_m: dep.runout_m,
-            ..Default::default()
-        });
+        runs.push(
+            FieldRun {
+                id: r.trajectory_id.clone(),
+                index,
+                block_id: r.block_id.clone(),
+                mass_kg: block.mass_kg,
+                size_m: size,
+                release_m: r.position_m,
+                velocity_mps: r.velocity_mps,
+                spin_radps: r.spin_radps,
+                rest_m: dep.position_m,
+                runout_m: dep.runout_m,
+                ..Default::default()
+            }
+            .in_axes(|p| up.to_internal(p).into()),
+        );
     }
     if runs.len() < 6 {
         return Err(Error::format(

@@ -832,7 +832,7 @@ mod tests {
         write_profile_campaign(&spec, dir.path(), 0.0).unwrap();
         let campaign = crate::campaign::Campaign::read(dir.path()).unwrap();
         assert_eq!(campaign.tracks.len(), campaign.releases.len());
-        let (runs, groups) = super::super::runs::field_runs(&campaign, 2.0).unwrap();
+        let (runs, groups) = super::super::runs::field_runs(&campaign, 2.0, crate::terrain::UpAxis::Z).unwrap();
         let cfg = super::super::config::CalibrationConfig::default();
         let read = Model2d::new(&campaign, runs, groups, &dir.path().join("profile.csv"), &cfg).unwrap();
         // The campaign read from the files simulates (and measures the rebounds of) the true paths again.
@@ -859,7 +859,7 @@ mod tests {
         write_terrain_campaign(&spec, dir.path(), 0.0, &SimParams::default()).unwrap();
         let campaign = crate::campaign::Campaign::read(dir.path()).unwrap();
         assert_eq!(campaign.tracks.len(), campaign.releases.len());
-        let (runs, groups) = super::super::runs::field_runs(&campaign, 10.0).unwrap();
+        let (runs, groups) = super::super::runs::field_runs(&campaign, 10.0, crate::terrain::UpAxis::Z).unwrap();
         let cfg = super::super::config::CalibrationConfig::default();
         let read = Model3d::new(&campaign, runs, groups, &dir.path().join("terrain.obj"), &cfg, "test").unwrap();
         let memory = synthetic_3d(&spec, SimParams::default()).unwrap();

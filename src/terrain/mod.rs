@@ -48,6 +48,11 @@ impl UpAxis {
         }
     }
 
+    /// The horizontal position ([`Self::horizontal`]) of the point (x, y) of talus's z-up axes.
+    pub fn horizontal_of_internal(self, x: f64, y: f64) -> [f64; 2] {
+        self.horizontal(self.to_file(&Vector3::new(x, y, 0.0)))
+    }
+
     /// talus z-up axes back to the file's axes.
     pub fn to_file(self, v: &Vector3<f64>) -> [f64; 3] {
         match self {
