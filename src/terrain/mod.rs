@@ -39,18 +39,13 @@ impl UpAxis {
         }
     }
 
-    /// The horizontal position of a file point as the user gives polygons: (x, y) for z-up files, (x, z) for y-up
-    /// ones ([`horizontal_to_local`]).
-    pub fn horizontal(self, p: [f64; 3]) -> [f64; 2] {
-        match self {
-            UpAxis::Z => [p[0], p[1]],
-            UpAxis::Y => [p[0], p[2]],
-        }
-    }
-
-    /// The horizontal position ([`Self::horizontal`]) of the point (x, y) of talus's z-up axes.
+    /// The point (x, y) of talus's z-up axes as the user gives polygons: (x, y) for z-up files, (x, z) for y-up ones
+    /// (the inverse of [`horizontal_to_local`] but for the origin).
     pub fn horizontal_of_internal(self, x: f64, y: f64) -> [f64; 2] {
-        self.horizontal(self.to_file(&Vector3::new(x, y, 0.0)))
+        match self {
+            UpAxis::Z => [x, y],
+            UpAxis::Y => [x, -y],
+        }
     }
 
     /// talus z-up axes back to the file's axes.
