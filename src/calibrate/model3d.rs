@@ -65,8 +65,9 @@ fn terrain_extent(terrain: &Terrain) -> String {
 
 impl Model3d {
     /// Reads the terrain file and builds the blocks of `campaign` for its `runs` (in the model's frame:
-    /// [`super::runs::field_runs`] with the settings' up axis). `source` names the settings file in errors. A release not over the terrain or more than a metre below it, and a rest point not over it,
-    /// are refused ([`Campaign::check_release_points`], [`Campaign::check_rest_points`]).
+    /// [`super::runs::field_runs`] with the settings' up axis). `source` names the settings file in errors. A
+    /// release not over the terrain or more than a metre below it, and a rest point not over it, are refused
+    /// ([`Campaign::check_release_points`], [`Campaign::check_rest_points`]).
     pub fn new(
         campaign: &Campaign,
         runs: Vec<FieldRun>,

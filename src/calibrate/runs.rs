@@ -55,17 +55,6 @@ pub struct FieldRun {
 }
 
 impl FieldRun {
-    /// The run with its positions, velocity and spin given by `f` in other axes.
-    pub fn in_axes(&self, f: impl Fn([f64; 3]) -> [f64; 3]) -> FieldRun {
-        FieldRun {
-            release_m: f(self.release_m),
-            velocity_mps: f(self.velocity_mps),
-            spin_radps: f(self.spin_radps),
-            rest_m: f(self.rest_m),
-            ..self.clone()
-        }
-    }
-
     /// True if the run's track shows a bounce with a tangential restitution (the bounce score's,
     /// [`super::objective::bounce_crps`]).
     pub fn has_tangential_bounce(&self) -> bool {
@@ -107,22 +96,20 @@ pub fn field_runs(campaign: &Campaign, group_link_m: f64, up: UpAxis) -> Result<
         let block = &campaign.blocks[&r.block_id];
         let mut size = block.size_m;
         size.sort_by(|a, b| b.total_cmp(a));
-        runs.push(
-            FieldRun {
-                id: r.trajectory_id.clone(),
-                index,
-                block_id: r.block_id.clone(),
-                mass_kg: block.mass_kg,
-                size_m: size,
-                release_m: r.position_m,
-                velocity_mps: r.velocity_mps,
-                spin_radps: r.spin_radps,
-                rest_m: dep.position_m,
-                runout_m: dep.runout_m,
-                ..Default::default()
-            }
-            .in_axes(|p| up.to_internal(p).into()),
-        );
+        let turn = |p: [f64; 3]| -> [f64; 3] { up.to_internal(p).into() };
+        runs.push(FieldRun {
+            id: r.trajectory_id.clone(),
+            index,
+            block_id: r.block_id.clone(),
+            mass_kg: block.mass_kg,
+            size_m: size,
+            release_m: turn(r.position_m),
+            velocity_mps: turn(r.velocity_mps),
+            spin_radps: turn(r.spin_radps),
+            rest_m: turn(dep.position_m),
+            runout_m: dep.runout_m,
+            ..Default::default()
+        });
     }
     if runs.len() < 6 {
         return Err(Error::format(
