@@ -1382,7 +1382,10 @@ fn a_y_up_campaign_calibrates_as_the_same_campaign_z_up() {
     assert_eq!(printed(z_model.as_ref()), printed(y_model.as_ref()));
     let (cal, hold) = split::seeded_split(z_model.runs(), 0.25, 1);
     let z = calibrate(z_model.as_ref(), &cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report;
-    let y = calibrate(y_model.as_ref(), &y_cfg, &cal, &hold, "seeded", None, &quiet).unwrap().report;
+    let out = tempfile::tempdir().unwrap();
+    let y = calibrate(y_model.as_ref(), &y_cfg, &cal, &hold, "seeded", Some(out.path()), &quiet).unwrap().report;
+    let md = std::fs::read_to_string(out.path().join("report.md")).unwrap();
+    assert!(md.contains("**Axes:** the terrain's files are y-up"), "report.md does not say its axes");
     for (a, b) in [(&z.baseline.calibration, &y.baseline.calibration), (&z.baseline.holdout, &y.baseline.holdout)] {
         assert_eq!(serde_json::to_value(a).unwrap(), serde_json::to_value(b).unwrap());
     }

@@ -692,6 +692,14 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
     if let Some(p) = &r.levelled_beyond_m {
         let _ = writeln!(s, "**Ground:** {}.\n", levelled_note(p));
     }
+    if r.settings.terrain.up == UpAxis::Y && r.model == "3drb" {
+        let _ = writeln!(
+            s,
+            "**Axes:** the terrain's files are y-up; positions in this report (rest points, maps, zones) are in \
+             talus's z-up axes, (x, −z, y) of the files'; the written scenario gives its polygons in the files' x and \
+             z.\n"
+        );
+    }
     for [a, b] in &r.duplicate_runs {
         let _ = writeln!(
             s,
