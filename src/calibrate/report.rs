@@ -696,8 +696,8 @@ pub fn markdown(r: &Report, figures: &[(String, String)], charted: &[String], sc
         let _ = writeln!(
             s,
             "**Axes:** the terrain's files are y-up; positions in this report (rest points, maps, zones) are in \
-             talus's z-up axes, (x, −z, y) of the files'; the written scenario gives its polygons in the files' x and \
-             z.\n"
+             talus's z-up axes, (x, −z, y) of the files'; the written scenario gives its polygons in the files' x \
+             and z.\n"
         );
     }
     for [a, b] in &r.duplicate_runs {
@@ -1035,9 +1035,9 @@ pub const FIELD_BOX_MARGIN_M: f64 = 10.0;
 
 /// The polygon around every run's release point and the rest points of calibration runs `cal`, widened by
 /// [`FIELD_BOX_MARGIN_M`] (a box in the horizontal axes of `up`'s files, corners counter-clockwise from the lowest):
-/// where the field says the ground is, for `[terrain] level_beyond`. The rest points are outcomes, so only calibration runs' go in: held-out
-/// runs choose no setting. The release points are where each run starts, known before its rock falls, and a held-out
-/// run must start on the ground as surveyed.
+/// where the field says the ground is, for `[terrain] level_beyond`. The rest points are outcomes, so only calibration
+/// runs' go in: held-out runs choose no setting. The release points are where each run starts, known before its rock
+/// falls, and a held-out run must start on the ground as surveyed.
 pub fn field_box_m(runs: &[FieldRun], cal: &[usize], up: UpAxis) -> Vec<[f64; 2]> {
     let points = runs.iter().map(|r| r.release_m).chain(cal.iter().map(|&i| runs[i].rest_m));
     let [x0, y0, x1, y1] = crate::terrain::bbox_xy(points.map(|p| up.horizontal_of_internal(p[0], p[1])));
