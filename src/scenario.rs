@@ -154,8 +154,26 @@ pub struct TerrainSpec {
     /// horizontal frame): the known ground continued level past its edge, for DEMs whose margins are extrapolated
     /// by a trend the ground does not follow. Unlike `clip`, rocks go on across the edge (default: heights as in
     /// the files).
-    #[serde(default)]
+    #[serde(default, deserialize_with = "level_polygon")]
     pub level_beyond: Option<Vec<[f64; 2]>>,
+}
+
+/// `level_beyond` of a scenario: a polygon. A word is refused with what to write instead: `"field"` is a calibration
+/// setting ([`crate::calibrate::config::LevelBeyond`]), the box of the field's runs, which a scenario has not got.
+fn level_polygon<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Option<Vec<[f64; 2]>>, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged, expecting = "expected a polygon [[x, y], ...]")]
+    enum Raw {
+        Polygon(Vec<[f64; 2]>),
+        Word(String),
+    }
+    match Raw::deserialize(d)? {
+        Raw::Polygon(p) => Ok(Some(p)),
+        Raw::Word(w) => Err(serde::de::Error::custom(format!(
+            "`{w}` is not a polygon: a scenario levels past a polygon [[x, y], ...] (`\"field\"` is for `talus \
+             calibrate` settings; the `calibrated.toml` a calibration writes gives the polygon it drew)"
+        ))),
+    }
 }
 
 /// The slope that parts `face` from `floor` with `materials_by = "slope"` when `slope_face_deg` is not given,

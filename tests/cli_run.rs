@@ -438,6 +438,9 @@ fn bad_input_is_answered_with_where_what_and_how() {
     let level = |poly: &str| with_terrain_key(d, "level_beyond", poly);
     fails_cleanly(d, &level("[[0.0, 0.0], [1.0, 1.0]]"), &["terrain.level_beyond", "2 vertices"]);
     fails_cleanly(d, &level("[[0.0, 0.0], [10.0, 0.0], [10.0, 10.0]]"), &["terrain.level_beyond", "no vertex"]);
+    // `"field"`, a calibration setting, is not a scenario's: it says what to write instead; so for a number.
+    fails_cleanly(d, &level("\"field\""), &["scenario.toml:", "`field` is not a polygon", "`talus calibrate`"]);
+    fails_cleanly(d, &level("3"), &["scenario.toml:", "expected a polygon [[x, y], ...]"]);
     // Cr of 1.5.
     fails_cleanly(d, &scenario(d, "", 1.5, "300.0"), &["materials.default.cr", "1.5"]);
     // A negative mass, one no rockfall has, and a word.
