@@ -65,7 +65,7 @@ impl Sources {
                 let campaign = crate::campaign::Campaign::read_on(dir, crate::campaign::Ground::Terrain)?;
                 for r in &campaign.releases {
                     let body = campaign.body(&campaign.blocks[&r.block_id])?;
-                    let p = terrain.up.to_internal(r.position_m) - terrain.origin;
+                    let p = terrain.from_file_frame(r.position_m);
                     if terrain.surface.at(p.x, p.y).is_none() {
                         return Err(Error::invalid(
                             format!("{f}: run {}", r.trajectory_id),

@@ -128,14 +128,14 @@ impl Model3d {
         let ground = terrain_extent(&terrain);
         let high = campaign.check_release_points(
             |p| {
-                let q = file_to_local(&terrain, p);
+                let q = terrain.from_file_frame(p);
                 terrain.surface.height(q.x, q.y).map(|z| q.z - z)
             },
             &ground,
         )?;
         campaign.check_rest_points(
             |p| {
-                let q = file_to_local(&terrain, p);
+                let q = terrain.from_file_frame(p);
                 terrain.surface.at(q.x, q.y).is_some()
             },
             &ground,
@@ -512,11 +512,6 @@ fn to_local(terrain: &Terrain, p: [f64; 3]) -> Vector3<f64> {
 /// A point of `terrain`'s local frame in the model's frame.
 fn to_model(terrain: &Terrain, local: &Vector3<f64>) -> [f64; 3] {
     (local + terrain.origin).into()
-}
-
-/// A point of the campaign's files in `terrain`'s local frame.
-fn file_to_local(terrain: &Terrain, p: [f64; 3]) -> Vector3<f64> {
-    terrain.up.to_internal(p) - terrain.origin
 }
 
 /// The bounces of `track` (model frame) over `terrain` ([`read_impacts`], read in the local frame, each bounce's

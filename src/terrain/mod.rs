@@ -93,6 +93,11 @@ impl Terrain {
         self.up.to_file(&(local + self.origin))
     }
 
+    /// A point of the files' frame and axes in the local frame (the inverse of [`Terrain::to_file_frame`]).
+    pub fn from_file_frame(&self, p: [f64; 3]) -> Vector3<f64> {
+        self.up.to_internal(p) - self.origin
+    }
+
     /// The material of triangle `t`.
     pub fn material_of(&self, t: u32) -> &Material {
         &self.materials[self.triangle_material[t as usize] as usize]
