@@ -105,3 +105,20 @@ fn the_example_check_catches_a_broken_example() {
         assert!(err.contains("not_a_key"), "{name}: {err}");
     }
 }
+
+#[test]
+fn every_example_is_on_the_examples_map() {
+    // examples/README.md is where a user looks first: each file and folder of `examples/` is named there (in
+    // backquotes, as `name`; a Rust example by its name without `.rs`).
+    let map = std::fs::read_to_string(examples_dir().join("README.md")).unwrap();
+    let missing: Vec<String> = std::fs::read_dir(examples_dir())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n != "README.md")
+        .filter(|n| {
+            let name = n.strip_suffix(".rs").unwrap_or(n);
+            !(map.contains(&format!("`{name}`")) || map.contains(&format!("`{n}/`")))
+        })
+        .collect();
+    assert!(missing.is_empty(), "name these in examples/README.md: {missing:?}");
+}
