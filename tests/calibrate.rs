@@ -1029,6 +1029,28 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     let o = run(&["--kfold", "0", "--out", bad_out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--kfold") && !bad_out.exists());
+    // A ground file of the other model's kind is named as such, before the campaign's columns are blamed.
+    let settings = d.join("settings.toml");
+    let out_arg = ["--out", bad_out.to_str().unwrap()];
+    let o = talus_calibrate(d, &d.join("profile.csv"), "3drb", &settings, &out_arg);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.code() == Some(2) && err.contains("profile.csv (--terrain)") && err.contains("--model 2dlm"),
+        "{err}"
+    );
+    let o = talus_calibrate(d, &d.join("site.asc"), "2dlm", &settings, &out_arg);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.code() == Some(2) && err.contains("terrain surface") && err.contains("--model 3drb"), "{err}");
+    // A campaign without observed_deposition.csv: the file is named as missing.
+    let bare = d.join("bare");
+    std::fs::create_dir(&bare).unwrap();
+    for f in ["release_points.csv", "block_metadata.csv"] {
+        std::fs::copy(d.join(f), bare.join(f)).unwrap();
+    }
+    let o = talus_calibrate(&bare, &d.join("profile.csv"), "2dlm", &settings, &out_arg);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.code() == Some(2) && err.contains("observed_deposition.csv: does not exist"), "{err}");
+    assert!(!bad_out.exists());
     // An unknown settings key: exit 2, named.
     std::fs::write(d.join("settings.toml"), "repeatz = 3\n").unwrap();
     let o = run(&["--out", out.to_str().unwrap()]);

@@ -56,6 +56,26 @@ use params::{Candidate, FreeParam, Params};
 use std::path::Path;
 use std::time::Instant;
 
+/// Refuses a terrain surface given to 2DLM and a profile CSV given to 3DRB, by the file's extension, before the
+/// campaign is read (whose columns would otherwise be blamed).
+fn check_ground_file(file: &Path, kind: ModelKind) -> Result<()> {
+    let ext = file.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    let is_csv = ext == "csv";
+    let is_surface = ["asc", "tif", "tiff", "obj", "stl"].contains(&ext.as_str());
+    let (what, fix) = match kind {
+        ModelKind::Lumped2d if is_surface => (
+            "is a terrain surface: `--model 2dlm` runs on a profile CSV (x_m, z_m, material)",
+            "give `--model 3drb` for this terrain, or cut a profile from it with `talus section`",
+        ),
+        ModelKind::Rigid3d if is_csv => (
+            "is a CSV: `--model 3drb` runs on a terrain surface (OBJ, STL, GeoTIFF or ESRI ASCII DEM)",
+            "give `--model 2dlm` for a profile CSV",
+        ),
+        _ => return Ok(()),
+    };
+    Err(Error::format(format!("{} (--terrain)", file.display()), what, fix))
+}
+
 /// Reads a campaign folder and binds it to the terrain (3DRB) or profile (2DLM) file.
 pub fn open_model(
     campaign_dir: &Path,
@@ -64,6 +84,7 @@ pub fn open_model(
     cfg: &CalibrationConfig,
     source: &str,
 ) -> Result<Box<dyn Model>> {
+    check_ground_file(terrain_file, kind)?;
     let ground = match kind {
         ModelKind::Rigid3d => Ground::Terrain,
         ModelKind::Lumped2d => Ground::Profile,

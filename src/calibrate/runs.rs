@@ -112,10 +112,17 @@ pub fn field_runs(campaign: &Campaign, group_link_m: f64, up: UpAxis) -> Result<
         });
     }
     if runs.len() < 6 {
+        let path = campaign.dir.join("observed_deposition.csv");
+        let what = if path.exists() {
+            format!("only {} runs have an observed rest point", runs.len())
+        } else {
+            "does not exist: a calibration needs the runs' observed rest points".to_string()
+        };
         return Err(Error::format(
-            campaign.dir.join("observed_deposition.csv").display().to_string(),
-            format!("only {} runs have an observed rest point", runs.len()),
-            "calibration needs at least 6 observed runs (and more to hold some out)",
+            path.display().to_string(),
+            what,
+            "calibration needs at least 6 observed runs (and more to hold some out), one row each: trajectory_id, \
+             x_m, y_m, z_m (docs/campaign.md)",
         ));
     }
     let groups = assign_groups(&mut runs, group_link_m);
