@@ -7,13 +7,14 @@ use talus::calibrate::config::{
     BackAnalysisConfig, CalibrationConfig, EffectsConfig, LevelBeyond, ModelKind, Objective, ParamSetting,
 };
 use talus::calibrate::crossval::fold_assignment;
+use talus::calibrate::diagnose::spread_check;
 use talus::calibrate::fit::{with_unit, SearchRecord};
 use talus::calibrate::metrics::metrics;
 use talus::calibrate::model::evaluate;
 use talus::calibrate::model3d::Model3d;
 use talus::calibrate::objective::run_score;
 use talus::calibrate::params::{Candidate, Region};
-use talus::calibrate::report::field_box_m;
+use talus::calibrate::report::{field_box_m, narrow_warning};
 use talus::calibrate::stats::mean;
 use talus::calibrate::synthetic::{
     case_2d, case_3d, standard_zone, synthetic_2d, synthetic_3d, truth_2d, zone_overlap, Synthetic2d, Synthetic3d,
@@ -768,12 +769,17 @@ fn a_declared_survey_error_makes_the_true_models_ranges_hold_the_noisy_rest_poin
         let all: Vec<usize> = (0..model.runs().len()).collect();
         let s = evaluate(&model, &truth_2d(&spec), &all, 20, 1, 0).unwrap();
         let m = metrics(model.runs(), &s);
-        (m.coverage_90, m.coverage_90_if_right, s)
+        let spread = spread_check(model.runs(), &s);
+        (m.coverage_90, m.coverage_90_if_right, s, spread)
     };
-    let (plain, plain_if_right, plain_sims) = coverage(None);
-    let (read, read_if_right, read_sims) = coverage(Some(spec.noise_m));
+    let (plain, plain_if_right, plain_sims, plain_spread) = coverage(None);
+    let (read, read_if_right, read_sims, read_spread) = coverage(Some(spec.noise_m));
     assert!(plain < plain_if_right - 0.1, "{plain} {plain_if_right}");
     assert!((read - read_if_right).abs() < 0.06, "{read} {read_if_right}");
+    // A calibration's report warns of the narrow ranges and names the survey error first; declared, it is quiet.
+    let w = narrow_warning(&plain_spread, 20, false, ModelKind::Lumped2d).expect("ranges too narrow");
+    assert!(w.contains("`rest_noise_m = SD`") && w.contains("`rn_sd`"), "{w}");
+    assert_eq!(narrow_warning(&read_spread, 20, true, ModelKind::Lumped2d), None, "{read_spread:?}");
     // Only the rest points and run-outs move, each by a Gaussian error along the profile.
     let moved: Vec<f64> = plain_sims
         .iter()

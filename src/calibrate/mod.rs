@@ -417,6 +417,11 @@ pub fn calibrate(
         log(&format!("warning: {w}"));
         report.warnings.push(w);
     }
+    let spread = diagnose::spread_check(runs, &final_cal);
+    if let Some(w) = report::narrow_warning(&spread, cfg.repeats, cfg.rest_noise_m.is_some(), model.kind()) {
+        log(&format!("warning: {w}"));
+        report.warnings.push(w);
+    }
     report.timing.total_s = t0.elapsed().as_secs_f64();
     report.timing.final_evaluation_s = report.timing.total_s - t_loop;
     report.timing.simulations = ctx.simulations.load(std::sync::atomic::Ordering::Relaxed);

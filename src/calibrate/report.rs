@@ -2,7 +2,7 @@
 //! person), SVG charts and the residual maps (GeoTIFF and PNG).
 
 use super::backanalysis::{BackAnalysisRow, Profile, SpreadProfile};
-use super::config::CalibrationConfig;
+use super::config::{CalibrationConfig, ModelKind};
 use super::diagnose::{covariates, residuals, Diagnostic};
 use super::effects_loop::{AddedEffect, EffectTrial};
 use super::impacts::{BounceRanks, BOUNCE_NEIGHBOURS, BOUNCE_RESIDUAL};
@@ -1061,6 +1061,52 @@ pub fn levelled_note(polygon: &[[f64; 2]]) -> String {
     )
 }
 
+/// The spread check's p-value ([`super::diagnose::spread_check`]) on the final model's calibration runs at or below
+/// which the report warns that its ranges are too narrow (ours: the 1 % at which the loop's signals are read).
+pub const NARROW_WARNING_P: f64 = 0.01;
+
+/// The warning for a final model whose simulated run-outs are too narrow for its calibration runs: more of them lie
+/// outside every one of their `repeats` simulations than the 2/(repeats + 1) a right model leaves out, at
+/// `spread` ([`super::diagnose::spread_check`]) p ≤ [`NARROW_WARNING_P`]. Rest points recorded with a survey error
+/// scatter past a model that predicts where rocks stopped (docs/calibration.md, "The survey's error on the rest
+/// points"), so where `rest_noise_m` is not declared that is the first remedy named; the other is scatter the
+/// model lacks. None otherwise.
+pub fn narrow_warning(
+    spread: &Diagnostic,
+    repeats: usize,
+    rest_noise_declared: bool,
+    kind: ModelKind,
+) -> Option<String> {
+    (spread.n > 0 && spread.p_value <= NARROW_WARNING_P).then(|| {
+        let spreads = match kind {
+            ModelKind::Rigid3d => {
+                "free or widen the spreads between rocks (`cr_sd`, `dynamic_friction_sd_deg`) or \
+                                   declare `roughness` under `[effects.declared]`"
+            }
+            ModelKind::Lumped2d => "free the spreads between rocks (`rn_sd`, `rt_sd`)",
+        };
+        let remedy = if rest_noise_declared {
+            format!("the declared `rest_noise_m` does not account for it: the model lacks scatter; {spreads}")
+        } else {
+            format!(
+                "if the rest points carry a survey error (a handheld GPS or pacing: a metre is common), declare its sd \
+                 in the settings file (`rest_noise_m = SD`, m) so that simulated rest points are read as the field's \
+                 were; otherwise the model lacks scatter: {spreads}"
+            )
+        };
+        format!(
+            "the final model's run-out ranges are too narrow for its calibration runs: {:.0} % of them lie outside \
+             every one of their {repeats} simulations, where a right model leaves about {:.0} % out (spread check p = \
+             {:.3}), so `coverage_90` reads low. {}{}",
+            100.0 * spread.spearman_rho,
+            200.0 / (repeats as f64 + 1.0),
+            spread.p_value,
+            remedy[..1].to_uppercase(),
+            &remedy[1..]
+        )
+    })
+}
+
 /// Share of a model's simulations of the calibration runs not at rest above which the report warns (ours).
 pub const UNRESTED_WARNING_SHARE: f64 = 0.1;
 
@@ -1113,6 +1159,29 @@ mod tests {
     use super::*;
     use crate::calibrate::metrics::metrics;
     use crate::calibrate::metrics::tests::{run, sims};
+
+    #[test]
+    fn ranges_too_narrow_for_the_calibration_runs_are_warned_of_with_the_survey_error_first() {
+        let spread = |share: f64, p_value: f64| Diagnostic {
+            covariate: super::super::diagnose::OUTSIDE_RANGE.into(),
+            residual: "runout".into(),
+            spearman_rho: share,
+            p_value,
+            n: 40,
+        };
+        // At chance, or short of the 1 % level: quiet.
+        assert_eq!(narrow_warning(&spread(0.1, 0.5), 20, false, ModelKind::Rigid3d), None);
+        assert_eq!(narrow_warning(&spread(0.2, 0.011), 20, false, ModelKind::Rigid3d), None);
+        // Too narrow, no survey error declared: the share, what a right model leaves out, then the remedies.
+        let w = narrow_warning(&spread(0.25, 0.002), 20, false, ModelKind::Rigid3d).unwrap();
+        assert!(w.contains("25 % of them lie outside every one of their 20 simulations"), "{w}");
+        assert!(w.contains("about 10 % out") && w.contains("p = 0.002"), "{w}");
+        let (noise, scatter) = (w.find("`rest_noise_m = SD`").unwrap(), w.find("`cr_sd`").unwrap());
+        assert!(noise < scatter && w.contains("`roughness`"), "{w}");
+        // Declared: the scatter the model lacks only.
+        let w = narrow_warning(&spread(0.25, 0.002), 20, true, ModelKind::Lumped2d).unwrap();
+        assert!(w.contains("does not account for it") && w.contains("`rn_sd`") && !w.contains("SD`"), "{w}");
+    }
 
     #[test]
     fn a_calibration_whose_rocks_often_do_not_stop_is_warned_of() {
