@@ -1079,30 +1079,28 @@ pub fn narrow_warning(
 ) -> Option<String> {
     (spread.n > 0 && spread.p_value <= NARROW_WARNING_P).then(|| {
         let spreads = match kind {
-            ModelKind::Rigid3d => {
-                "free or widen the spreads between rocks (`cr_sd`, `dynamic_friction_sd_deg`) or \
-                                   declare `roughness` under `[effects.declared]`"
-            }
-            ModelKind::Lumped2d => "free the spreads between rocks (`rn_sd`, `rt_sd`)",
+            ModelKind::Rigid3d => "free or widen `cr_sd` and `dynamic_friction_sd_deg`, or declare `roughness`",
+            ModelKind::Lumped2d => "free `rn_sd` and `rt_sd`",
         };
         let remedy = if rest_noise_declared {
-            format!("the declared `rest_noise_m` does not account for it: the model lacks scatter; {spreads}")
+            format!(
+                "The declared `rest_noise_m` does not account for it: the model lacks scatter between rocks; \
+                 {spreads}."
+            )
         } else {
             format!(
-                "if the rest points carry a survey error (a handheld GPS or pacing: a metre is common), declare its sd \
+                "If the rest points carry a survey error (a handheld GPS or pacing: a metre is common), declare its sd \
                  in the settings file (`rest_noise_m = SD`, m) so that simulated rest points are read as the field's \
-                 were; otherwise the model lacks scatter: {spreads}"
+                 were; otherwise the model lacks scatter between rocks: {spreads}."
             )
         };
         format!(
             "the final model's run-out ranges are too narrow for its calibration runs: {:.0} % of them lie outside \
              every one of their {repeats} simulations, where a right model leaves about {:.0} % out (spread check p = \
-             {:.3}), so `coverage_90` reads low. {}{}",
+             {:.3}), so `coverage_90` reads low. {remedy}",
             100.0 * spread.spearman_rho,
             200.0 / (repeats as f64 + 1.0),
             spread.p_value,
-            remedy[..1].to_uppercase(),
-            &remedy[1..]
         )
     })
 }
