@@ -59,11 +59,9 @@ use std::time::Instant;
 /// Refuses a terrain surface given to 2DLM and a profile CSV given to 3DRB, by the file's extension, before the
 /// campaign is read (whose columns would otherwise be blamed).
 fn check_ground_file(file: &Path, kind: ModelKind) -> Result<()> {
-    let ext = file.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
-    let is_csv = ext == "csv";
-    let is_surface = ["asc", "tif", "tiff", "obj", "stl"].contains(&ext.as_str());
+    let is_csv = file.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
     let (what, fix) = match kind {
-        ModelKind::Lumped2d if is_surface => (
+        ModelKind::Lumped2d if crate::terrain::build::is_terrain_file(file) => (
             "is a terrain surface: `--model 2dlm` runs on a profile CSV (x_m, z_m, material)",
             "give `--model 3drb` for this terrain, or cut a profile from it with `talus section`",
         ),

@@ -35,9 +35,19 @@ impl TerrainPart {
     }
 }
 
+/// A file's extension in lower case (empty if it has none).
+fn extension(path: &Path) -> String {
+    path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase()
+}
+
+/// True for a file of a kind [`read_terrain_part`] reads as a terrain surface (by its extension).
+pub fn is_terrain_file(path: &Path) -> bool {
+    matches!(extension(path).as_str(), "obj" | "stl" | "tif" | "tiff" | "asc")
+}
+
 /// Reads a terrain file by its extension; DEMs are checked ([`super::dem_check`]) but not triangulated.
 fn read_terrain_part(path: &Path) -> Result<TerrainPart> {
-    let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    let ext = extension(path);
     match ext.as_str() {
         "obj" => Ok(TerrainPart::Mesh(crate::io::obj::read_obj(path)?)),
         "stl" => Ok(TerrainPart::Mesh(crate::io::stl::read_stl(path)?)),
