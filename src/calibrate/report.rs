@@ -1077,7 +1077,7 @@ pub fn narrow_warning(
     rest_noise_declared: bool,
     kind: ModelKind,
 ) -> Option<String> {
-    (spread.n > 0 && spread.p_value <= NARROW_WARNING_P).then(|| {
+    (spread.p_value <= NARROW_WARNING_P).then(|| {
         let spreads = match kind {
             ModelKind::Rigid3d => "free or widen `cr_sd` and `dynamic_friction_sd_deg`, or declare `roughness`",
             ModelKind::Lumped2d => "free `rn_sd` and `rt_sd`",
