@@ -40,7 +40,7 @@ fn extension(path: &Path) -> String {
     path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase()
 }
 
-/// True for a file of a kind [`read_terrain_part`] reads as a terrain surface (by its extension).
+/// True for a file of a kind read as a terrain surface (by its extension: OBJ, STL, GeoTIFF, ESRI ASCII grid).
 pub fn is_terrain_file(path: &Path) -> bool {
     matches!(extension(path).as_str(), "obj" | "stl" | "tif" | "tiff" | "asc")
 }
