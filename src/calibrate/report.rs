@@ -1131,7 +1131,9 @@ pub fn unrested_warning(baseline: &Metrics, final_model: &Metrics, field_box_m: 
                      DEM's extrapolated margin, not surveyed, `[terrain] level_beyond = {}` in the settings file \
                      continues it level past the runs' release points and the calibration runs' rest points, widened \
                      by {FIELD_BOX_MARGIN_M:.0} m; `level_beyond = \"field\"` levels past that box as each \
-                     calibration, each fold of `--kfold`, draws it from its own runs)",
+                     calibration, each fold of `--kfold`, draws it from its own runs; where the survey's extent is \
+                     known, level past it instead, on every side: docs/calibration.md, \"Where to level the \
+                     Tschamut proxy\")",
                     polygon_toml(p)
                 ),
             });
@@ -1203,7 +1205,7 @@ mod tests {
         let w = unrested_warning(&m(0.14, 0.14), &m(0.14, 0.14), field).unwrap();
         let polygon = "`[terrain] level_beyond = [[-3.0, 120.5], [136.4, 120.5], [136.4, 270.0], [-3.0, 270.0]]`";
         assert!(w.contains(polygon) && w.contains("widened by 10 m; `level_beyond = \"field\"`"), "{w}");
-        assert!(w.ends_with("each fold of `--kfold`, draws it from its own runs)"), "{w}");
+        assert!(w.contains("each fold of `--kfold`, draws it from its own runs; where the survey's extent"), "{w}");
         let w = unrested_warning(&m(0.2, 0.0), &m(0.2, 0.0), field).unwrap();
         assert!(!w.contains("level_beyond"), "{w}");
     }
