@@ -6,7 +6,7 @@
 use crate::error::{Error, Result};
 use crate::io::csv_text::{Row, Table};
 use crate::rock::{RockBody, RockSize, ShapeKind};
-use crate::scenario::MAX_ROCK_MASS_KG;
+use crate::scenario::{MAX_ROCK_MASS_KG, MIN_ROCK_MASS_KG, MIN_ROCK_SIZE_M};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -389,6 +389,17 @@ fn read_blocks(path: &Path) -> Result<BTreeMap<String, Block>> {
                     block.block_id, block.mass_kg, block.size_m
                 ),
                 "give the block's mass in kg and its sizes in metres (sizes in millimetres read 1000 times too large)",
+            ));
+        }
+        if block.mass_kg < MIN_ROCK_MASS_KG || block.size_m.iter().any(|&s| s < MIN_ROCK_SIZE_M) {
+            return Err(blk.error(
+                row,
+                format!(
+                    "block '{}' of {} kg and {:?} m is smaller than the smallest block talus takes ({MIN_ROCK_MASS_KG} \
+                     kg, {MIN_ROCK_SIZE_M} m a side: the 2 ms contact step does not resolve blocks of a few cm)",
+                    block.block_id, block.mass_kg, block.size_m
+                ),
+                "give the block's mass in kg and its sizes in metres",
             ));
         }
         blocks.insert(block.block_id.clone(), block);

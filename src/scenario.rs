@@ -30,9 +30,11 @@
 //! cell_size_m = 2.0
 //! ```
 
-use crate::error::{Error, Result};
+use crate::campaign::MAX_BLOCK_SIZE_M;
+use crate::error::{number_text, Error, Result};
 use crate::random::TruncNormal;
 use crate::sim::SimParams;
+use crate::source::{MAX_RELEASE_HEIGHT_M, MAX_RELEASE_SPEED_MPS, MAX_RELEASE_SPIN_RADPS};
 use crate::terrain::{Material, UpAxis};
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -234,8 +236,7 @@ pub struct SourceSpec {
     /// Scatter: only triangles at most this steep, degrees.
     pub max_slope_deg: Option<f64>,
     /// Scatter: only inside this polygon.
-    #[serde(default)]
-    pub within: Vec<[f64; 2]>,
+    pub within: Option<Vec<[f64; 2]>>,
     /// Number of rocks from this source.
     pub count: Option<usize>,
     /// Polygon and scatter: rocks per m² of horizontal area instead of a count.
@@ -299,6 +300,15 @@ fn default_density() -> f64 {
 /// avalanches move as a mass, not as one rigid block), and far below where the engine's numbers overflow (10³⁰⁰ kg
 /// gave infinite bounce heights).
 pub const MAX_ROCK_MASS_KG: f64 = 1e9;
+
+/// The smallest block mass a scenario or campaign may give, kg. Ours: with the 2 ms contact step, blocks of a few
+/// centimetres gain energy at impacts (on the bench stack a 0.03 kg flat box reached 257 kJ of the 38 J its drop
+/// holds; 0.1 to 3 kg blocks kept under their drop's energy in 1,000 rocks each); 1 kg is a block of about 7 cm,
+/// and rockfall hazard begins at about 10 cm.
+pub const MIN_ROCK_MASS_KG: f64 = 1.0;
+
+/// The smallest side of a block given by its dimensions, m (ours, for the same reason as [`MIN_ROCK_MASS_KG`]).
+pub const MIN_ROCK_SIZE_M: f64 = 0.05;
 
 /// One mass or a range.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, serde::Serialize)]
@@ -694,7 +704,7 @@ impl SourceSpec {
             ("material", self.material.is_some(), SourceKind::Scatter),
             ("min_slope_deg", self.min_slope_deg.is_some(), SourceKind::Scatter),
             ("max_slope_deg", self.max_slope_deg.is_some(), SourceKind::Scatter),
-            ("within", !self.within.is_empty(), SourceKind::Scatter),
+            ("within", self.within.is_some(), SourceKind::Scatter),
             ("campaign", self.campaign.is_some(), SourceKind::Campaign),
             ("repeats", self.repeats.is_some(), SourceKind::Campaign),
         ] {
@@ -707,8 +717,8 @@ impl SourceSpec {
                 ));
             }
         }
-        if !self.within.is_empty() {
-            check_polygon(&format!("{field}.within"), &self.within)?;
+        if let Some(within) = &self.within {
+            check_polygon(&format!("{field}.within"), within)?;
         }
         if let Some(m) = &self.material {
             if !known(m) {
@@ -761,32 +771,40 @@ impl SourceSpec {
             }
             (Some(_), None) => {}
         }
-        if !(self.height_m.is_finite() && self.height_m >= 0.0) {
+        if !(self.height_m.is_finite() && (0.0..=MAX_RELEASE_HEIGHT_M).contains(&self.height_m)) {
             return Err(Error::invalid(
                 format!("{field}.height_m"),
-                format!("must be 0 or more, got {}", self.height_m),
-                "give the release gap in m, e.g. 0.1",
+                format!("must be 0 to {MAX_RELEASE_HEIGHT_M} m, got {}", self.height_m),
+                "give the release gap above the ground in m, e.g. 0.1 (a cliff to fall from belongs in the terrain)",
             ));
         }
         if self.velocity_mps.is_some() && self.speed_mps.is_some() {
             return Err(Error::invalid(field, "has both velocity_mps and speed_mps", "keep one of them"));
         }
         if let Some(v) = self.velocity_mps {
-            if !v.iter().all(|x| x.is_finite()) {
+            let speed = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if !(speed.is_finite() && speed <= MAX_RELEASE_SPEED_MPS) {
                 return Err(Error::invalid(
                     format!("{field}.velocity_mps"),
-                    "is not finite",
+                    format!("{v:?} is not a speed of at most {MAX_RELEASE_SPEED_MPS} m/s"),
                     "give [vx, vy, vz] in m/s",
                 ));
             }
         }
-        for (k, r) in [("speed_mps", self.speed_mps), ("spin_radps", self.spin_radps)] {
+        for (k, r, max, unit) in [
+            ("speed_mps", self.speed_mps, MAX_RELEASE_SPEED_MPS, "m/s"),
+            ("spin_radps", self.spin_radps, MAX_RELEASE_SPIN_RADPS, "rad/s"),
+        ] {
             if let Some([a, b]) = r {
-                if !(a.is_finite() && b.is_finite() && 0.0 <= a && a <= b) {
+                if !(a.is_finite() && b.is_finite() && 0.0 <= a && a <= b && b <= max) {
                     return Err(Error::invalid(
                         format!("{field}.{k}"),
-                        format!("[{a}, {b}] is not a range of non-negative values"),
-                        "give [min, max] with 0 <= min <= max",
+                        format!(
+                            "[{}, {}] is not a range of values from 0 to {max} {unit}",
+                            number_text(a),
+                            number_text(b)
+                        ),
+                        format!("give [min, max] with 0 <= min <= max <= {max}"),
                     ));
                 }
             }
@@ -852,6 +870,13 @@ impl RockSpec {
                     "give the block's mass in kg (10⁹ kg is a block of about 370,000 m³: a rock avalanche, not a rockfall)",
                 ));
             }
+            if m < MIN_ROCK_MASS_KG {
+                return Err(Error::invalid(
+                    format!("{field}.mass_kg"),
+                    format!("{} kg is less than the smallest block talus takes, {MIN_ROCK_MASS_KG} kg", number_text(m)),
+                    "give the block's mass in kg (the contact step of 2 ms does not resolve blocks of a few cm)",
+                ));
+            }
             Ok(())
         };
         match (self.mass_kg, self.dimensions_m) {
@@ -882,9 +907,23 @@ impl RockSpec {
                 }
             }
             (None, Some(d)) => {
-                for v in d {
-                    positive("dimensions_m", v)?;
+                let box_mass_kg = self.density_kg_m3 * d.iter().product::<f64>();
+                if !(box_mass_kg.is_finite() && box_mass_kg <= MAX_ROCK_MASS_KG) {
+                    return Err(Error::invalid(
+                        format!("{field}.dimensions_m"),
+                        format!("{d:?} m at {} kg/m³ weigh up to {box_mass_kg:.3e} kg", self.density_kg_m3),
+                        format!("give the block's sides in m: it may weigh at most {MAX_ROCK_MASS_KG} kg"),
+                    ));
                 }
+            }
+        }
+        if let Some(d) = self.dimensions_m {
+            if !d.iter().all(|v| (MIN_ROCK_SIZE_M..=MAX_BLOCK_SIZE_M).contains(v)) {
+                return Err(Error::invalid(
+                    format!("{field}.dimensions_m"),
+                    format!("{d:?} has a side outside {MIN_ROCK_SIZE_M} to {MAX_BLOCK_SIZE_M} m"),
+                    "give the block's three sides in m (sides in mm read 1000 times too large)",
+                ));
             }
         }
         Ok(out)

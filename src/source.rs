@@ -17,6 +17,17 @@ use nalgebra::Vector3;
 /// largest ensembles hazard maps use. Split a larger ensemble into runs with different seeds.
 pub const MAX_ROCKS: usize = 10_000_000;
 
+/// Largest release speed, m/s (ours): a free fall of 510 m, over three times the speeds rockfall codes are made for
+/// (at most 30 m/s, physics.md §6); a rock thrown at 10³⁰ m/s never finishes its run.
+pub const MAX_RELEASE_SPEED_MPS: f64 = 100.0;
+
+/// Largest release spin, rad/s (ours): the rim of a 0.3 m block spinning at 200 rad/s moves at 30 m/s, as fast as
+/// rockfall blocks fly (physics.md §6).
+pub const MAX_RELEASE_SPIN_RADPS: f64 = 200.0;
+
+/// Largest release height above the ground, m (ours): a cliff is part of the terrain, not a gap to drop across.
+pub const MAX_RELEASE_HEIGHT_M: f64 = 1000.0;
+
 #[derive(Debug, Clone)]
 enum Geometry {
     Point([f64; 2]),
@@ -145,7 +156,7 @@ impl Sources {
                     (Geometry::Polygon { pts, bbox }, area)
                 }
                 SourceKind::Scatter => {
-                    let within: Vec<[f64; 2]> = spec.within.iter().map(to_local).collect();
+                    let within: Vec<[f64; 2]> = spec.within.iter().flatten().map(to_local).collect();
                     let mat = spec.material.as_ref().and_then(|m| terrain.material_index(m));
                     let mut triangles = Vec::new();
                     let mut cum_area = Vec::new();

@@ -255,3 +255,100 @@ fn section_material_names_that_would_break_the_csv_are_refused() {
     let csv = std::fs::read_to_string(dir.path().join("s.csv")).unwrap();
     assert!(csv.lines().skip(1).all(|l| l.split(',').count() == 3 && l.ends_with(",rock_1")), "{csv}");
 }
+
+/// Values that made a run never finish (a step of 10⁻¹² s, a release at 10³⁰ m/s, 4·10⁹ solver sweeps a step) or
+/// end in nonsense (a 10⁻³⁰⁰ kg block left the terrain with NaN end points; a 1 g block gained kilojoules at
+/// impacts; a 10⁵ m cube weighed 10¹⁸ kg past the mass limit; a spin of 10¹² rad/s) are refused by name.
+#[test]
+fn engine_settings_and_releases_that_never_finish_or_end_in_nonsense_are_refused() {
+    let cases: [(&str, &str, &[&str]); 11] = [
+        ("seed = 1", "seed = 1\ndt_s = 1e-12", &["simulation.dt_s", "below the smallest step, 0.0001 s"]),
+        ("seed = 1", "seed = 1\nmax_time_s = 1e9", &["simulation.max_time_s", "longer than any rockfall"]),
+        ("seed = 1", "seed = 1\nsolver_iterations = 4000000000", &["simulation.solver_iterations", "1 to 10000"]),
+        ("height_m = 0.1", "height_m = 1e30", &["sources[0].height_m", "0 to 1000 m"]),
+        ("height_m = 0.1", "height_m = 0.1\nspeed_mps = [1e30, 1e30]", &["sources[0].speed_mps", "1.00e30", "100 m/s"]),
+        ("height_m = 0.1", "height_m = 0.1\nvelocity_mps = [0, 0, -1e3]", &["sources[0].velocity_mps", "100 m/s"]),
+        ("height_m = 0.1", "height_m = 0.1\nspin_radps = [0, 1e12]", &["sources[0].spin_radps", "200 rad/s"]),
+        ("mass_kg = [100.0, 10000.0]", "mass_kg = 1e-300", &["rocks.mass_kg", "1.00e-300 kg", "smallest block"]),
+        ("mass_kg = [100.0, 10000.0]", "mass_kg = [0.001, 10.0]", &["rocks.mass_kg", "0.001 kg", "1 kg"]),
+        ("mass_kg = [100.0, 10000.0]", "dimensions_m = [1e5, 1e5, 1e5]", &["rocks.dimensions_m", "2.650e18 kg"]),
+        ("mass_kg = [100.0, 10000.0]", "dimensions_m = [1.0, 1.0, 0.01]", &["rocks.dimensions_m", "0.05 to 100 m"]),
+    ];
+    for (from, to, needles) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        bench_scenario(dir.path(), from, to);
+        refused(&["run", "scenario.toml", "--rocks", "5", "--out", "out"], dir.path(), needles);
+    }
+}
+
+#[test]
+fn a_profile_release_far_past_a_rockfall_is_refused() {
+    let text = std::fs::read_to_string(shipped("examples/profile_bench.toml")).unwrap();
+    for (from, to, needles) in [
+        ("height_m = 0.5", "height_m = 1e30", ["release.height_m", "[0, 1000]"]),
+        ("vx_mps = [1.0, 2.0]", "vx_mps = 1e30", ["release.vx_mps", "[-100, 100]"]),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        assert!(text.contains(from), "{from}");
+        std::fs::write(dir.path().join("p.toml"), text.replace(from, to)).unwrap();
+        refused(&["profile", "p.toml", "--out", "out"], dir.path(), &needles);
+    }
+}
+
+/// A stretch of 10⁻⁹ m asked for 10¹¹ stretches and aborted the run out of memory; an empty `within` scattered
+/// over the whole terrain.
+#[test]
+fn a_stretch_below_half_a_metre_and_an_empty_scatter_polygon_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let collector = "[[collectors]]\nline = [[40.0, 10.0], [40.0, 90.0]]\nsegment_m = 1e-9\n\n[simulation]";
+    bench_scenario(dir.path(), "[simulation]", collector);
+    refused(&["run", "scenario.toml", "--out", "out"], dir.path(), &["collectors[0].segment_m", "at least 0.5 m"]);
+    let design = "[barrier_design]\nsegment_m = 1e-9\n\n[simulation]";
+    bench_scenario(dir.path(), "[simulation]", design);
+    refused(&["barrier", "scenario.toml", "--out", "out"], dir.path(), &["barrier_design.segment_m", "0.5 m"]);
+    bench_scenario(dir.path(), "within = [[10.0, 35.0], [21.6, 35.0], [21.6, 65.0], [10.0, 65.0]]", "within = []");
+    refused(&["run", "scenario.toml", "--out", "out"], dir.path(), &["sources[0].within", "has 0 vertices"]);
+}
+
+/// A 12,000 × 12,000 DEM aborted out of memory while it was triangulated; two terrain files 300 km apart (one in
+/// another CRS) asked for 10¹⁰ index bins.
+#[test]
+fn a_dem_too_large_to_triangulate_and_terrain_files_far_apart_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenario = |files: &str| {
+        let text = format!(
+            "[terrain]\nfiles = [{files}]\n[materials.default]\npreset = \"face_all\"\n[[sources]]\ntype = \"point\"\n\
+             points = [[20.0, 50.0]]\ncount = 5\n[rocks]\nshapes = [\"cube\"]\nmass_kg = 100.0\n"
+        );
+        std::fs::write(dir.path().join("scenario.toml"), text).unwrap();
+    };
+    let n = 4001;
+    let mut dem = talus::raster::Grid::filled(n, n, 0.0, n as f64, 1.0, 0.0);
+    for (k, z) in dem.values.iter_mut().enumerate() {
+        *z = 0.5 * (k % n) as f32;
+    }
+    talus::io::geotiff::write_grid(&dir.path().join("big.tif"), &dem).unwrap();
+    scenario("\"big.tif\"");
+    refused(
+        &["run", "scenario.toml", "--out", "out"],
+        dir.path(),
+        &["big.tif", "4001 × 4001 = 16008001 cells", "16000000", "coarser cell"],
+    );
+    std::fs::remove_file(dir.path().join("big.tif")).unwrap();
+    // The stack's mesh and a copy of it moved 300 km east and 300 km north.
+    let mesh = shipped("meshes/bench_stack/bench_stack.obj");
+    let far: String = std::fs::read_to_string(&mesh)
+        .unwrap()
+        .lines()
+        .map(|l| match l.strip_prefix("v ") {
+            Some(v) => {
+                let c: Vec<f64> = v.split_whitespace().map(|x| x.parse().unwrap()).collect();
+                format!("v {} {} {}\n", c[0] + 3e5, c[1] + 3e5, c[2])
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::write(dir.path().join("far.obj"), far).unwrap();
+    scenario(&format!("\"{}\", \"far.obj\"", mesh.display().to_string().replace('\\', "/")));
+    refused(&["run", "scenario.toml", "--out", "out"], dir.path(), &["terrain.files", "lie far apart", "same CRS"]);
+}

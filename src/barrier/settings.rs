@@ -15,6 +15,7 @@
 //! across_models = "worst"             # worst | pooled (with `talus barrier --models`)
 //! ```
 
+use crate::collector::{DEFAULT_SEGMENT_M, MIN_SEGMENT_M};
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -111,7 +112,7 @@ impl Default for DesignSpec {
             max_slope_deg: 45.0,
             contours: true,
             benches: true,
-            segment_m: crate::collector::DEFAULT_SEGMENT_M,
+            segment_m: DEFAULT_SEGMENT_M,
             min_rocks: 20,
             min_share_of_released: 0.05,
             class_energy: ClassEnergy::P95,
@@ -185,10 +186,10 @@ impl DesignSpec {
                 "use e.g. 45",
             ));
         }
-        if !(self.segment_m.is_finite() && self.segment_m > 0.0) {
+        if !(self.segment_m.is_finite() && self.segment_m >= MIN_SEGMENT_M) {
             return Err(Error::invalid(
                 k("segment_m"),
-                format!("must be positive, got {}", self.segment_m),
+                format!("must be at least {MIN_SEGMENT_M} m, got {}", self.segment_m),
                 "use e.g. 5",
             ));
         }

@@ -41,6 +41,10 @@ use std::path::{Path, PathBuf};
 /// Default stretch length, m.
 pub const DEFAULT_SEGMENT_M: f64 = 5.0;
 
+/// The shortest stretch of a collector or a barrier line, m (ours: about a block's width; 10⁻⁹ m asked for 10¹¹
+/// stretches and exhausted memory).
+pub const MIN_SEGMENT_M: f64 = 0.5;
+
 fn default_segment_m() -> f64 {
     DEFAULT_SEGMENT_M
 }
@@ -71,10 +75,10 @@ pub struct CollectorSpec {
 impl CollectorSpec {
     /// Checks the spec (`field` locates it in errors) and makes its file path absolute (relative to `base`).
     pub fn check(&mut self, field: &str, base: &Path) -> Result<()> {
-        if !(self.segment_m.is_finite() && self.segment_m > 0.0) {
+        if !(self.segment_m.is_finite() && self.segment_m >= MIN_SEGMENT_M) {
             return Err(Error::invalid(
                 format!("{field}.segment_m"),
-                format!("must be positive, got {}", self.segment_m),
+                format!("must be at least {MIN_SEGMENT_M} m, got {}", self.segment_m),
                 "give a stretch length in m, e.g. 5",
             ));
         }

@@ -5,8 +5,9 @@
 
 use super::engine::RockStart2d;
 use super::profile::Profile;
-use crate::error::{Error, Result};
+use crate::error::{number_text, Error, Result};
 use crate::random::{uniform_in, Rng};
+use crate::source::{MAX_RELEASE_HEIGHT_M, MAX_RELEASE_SPEED_MPS, MAX_RELEASE_SPIN_RADPS};
 use serde::de::{self, SeqAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
 
@@ -53,7 +54,7 @@ impl ValueRange {
         if self.min < lo || self.max > hi {
             return Err(Error::invalid(
                 field,
-                format!("[{}, {}] is outside {what} [{lo}, {hi}]", self.min, self.max),
+                format!("[{}, {}] is outside {what} [{lo}, {hi}]", number_text(self.min), number_text(self.max)),
                 format!("keep it within {what}"),
             ));
         }
@@ -159,11 +160,11 @@ impl Release2d {
     pub fn validate(&self, profile: &Profile, prefix: &str) -> Result<()> {
         let (x0, x1) = profile.x_range_m();
         self.x_m.check(&format!("{prefix}x_m"), x0, x1, "the profile's x range")?;
-        self.height_m.check(&format!("{prefix}height_m"), 0.0, f64::MAX, "non-negative heights")?;
-        let any = -f64::MAX..=f64::MAX;
-        self.vx_mps.check(&format!("{prefix}vx_mps"), *any.start(), *any.end(), "finite values")?;
-        self.vz_mps.check(&format!("{prefix}vz_mps"), *any.start(), *any.end(), "finite values")?;
-        self.spin_radps.check(&format!("{prefix}spin_radps"), *any.start(), *any.end(), "finite values")?;
+        let (h, v, w) = (MAX_RELEASE_HEIGHT_M, MAX_RELEASE_SPEED_MPS, MAX_RELEASE_SPIN_RADPS);
+        self.height_m.check(&format!("{prefix}height_m"), 0.0, h, "the release heights above the ground, m")?;
+        self.vx_mps.check(&format!("{prefix}vx_mps"), -v, v, "the release speeds, m/s")?;
+        self.vz_mps.check(&format!("{prefix}vz_mps"), -v, v, "the release speeds, m/s")?;
+        self.spin_radps.check(&format!("{prefix}spin_radps"), -w, w, "the release spins, rad/s")?;
         if !(self.mass_kg.is_finite() && self.mass_kg > 0.0) {
             return Err(Error::invalid(
                 format!("{prefix}mass_kg"),

@@ -177,11 +177,14 @@ impl RockBody {
             }
             RockSize::Mass { .. } => unit,
         };
-        let (hull_pts, hull_tris) = parry3d_f64::transformation::try_convex_hull(&points).map_err(|e| {
+        let (hull_pts, hull_tris) = parry3d_f64::transformation::try_convex_hull(&points).map_err(|_| {
             Error::invalid(
                 field,
-                format!("the points of shape '{}' have no convex hull: {e:?}", kind.name()),
-                "give points that span a volume",
+                format!(
+                    "the points of shape '{}' have no convex hull: they coincide, lie on a line or in one plane",
+                    kind.name()
+                ),
+                "give at least 4 distinct points that span a volume (the corners of the block, say)",
             )
         })?;
         let mp = MassProperties::from_convex_polyhedron(1.0, &hull_pts, &hull_tris);

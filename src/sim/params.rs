@@ -25,6 +25,17 @@ pub const MAX_SOLVER_TOLERANCE_MPS: f64 = 1e-4;
 /// Most `impact_substeps` (ours: 64 sub-steps take a 2 ms impact step to about 0.03 ms).
 pub const MAX_IMPACT_SUBSTEPS: usize = 64;
 
+/// Smallest `dt_s`, s (ours): the contact steps converge by 0.25 ms (tests/engine.rs), and a rock rolling for the
+/// default 120 s takes 1.2 million steps at 0.1 ms; at 10⁻¹² s a run never ends.
+pub const MIN_DT_S: f64 = 1e-4;
+
+/// Most `max_time_s`, s (ours): an hour, far beyond any rockfall (the Tschamut blocks ran for under a minute).
+pub const MAX_TIME_S: f64 = 3600.0;
+
+/// Most `solver_iterations` (ours): a hundred times the default; the contact solver converges in a few sweeps
+/// (about 8 a contact step on Tschamut), so more only lets a run that cannot converge take forever.
+pub const MAX_SOLVER_ITERATIONS: usize = 10_000;
+
 /// Engine settings. Defaults follow physics.md §6 and §8; values marked "ours" are our own choice.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -122,11 +133,20 @@ impl SimParams {
         };
         pos("dt_s", self.dt_s, "use a step of 0.0005 to 0.002 s")?;
         at_most("dt_s", self.dt_s, 0.01, "is too coarse for contact", "use 0.0005 to 0.002 s")?;
+        if self.dt_s < MIN_DT_S {
+            return Err(Error::invalid(
+                format!("{prefix}dt_s"),
+                format!("{} s is below the smallest step, {MIN_DT_S} s", crate::error::number_text(self.dt_s)),
+                "use 0.0005 to 0.002 s (results converge by 0.00025 s; a finer step only makes a run take hours)",
+            ));
+        }
         pos("max_flight_step_s", self.max_flight_step_s, "use about 0.25 s")?;
         pos("contact_duration_s", self.contact_duration_s, "use 0.002 s, the default")?;
         let hint = "use 0.002 s, the default (impacts of rocks on soil last milliseconds)";
         at_most("contact_duration_s", self.contact_duration_s, 0.1, "is longer than a rock's impact lasts", hint)?;
         pos("max_time_s", self.max_time_s, "use for example 120 s")?;
+        let hint = "use for example 120 s (a rock still moving after an hour is caught in a hollow, not falling)";
+        at_most("max_time_s", self.max_time_s, MAX_TIME_S, "is longer than any rockfall", hint)?;
         pos("stop_speed_mps", self.stop_speed_mps, "use about 0.1 m/s")?;
         pos("stop_spin_radps", self.stop_spin_radps, "use about 0.2 rad/s")?;
         pos("stop_duration_s", self.stop_duration_s, "use about 0.5 s")?;
@@ -160,11 +180,11 @@ impl SimParams {
                 "use 1 (none) or 8 (impacts resolved at an eighth of dt_s)",
             ));
         }
-        if self.solver_iterations == 0 {
+        if !(1..=MAX_SOLVER_ITERATIONS).contains(&self.solver_iterations) {
             return Err(Error::invalid(
                 format!("{prefix}solver_iterations"),
-                "must be at least 1",
-                "use for example 100",
+                format!("must be 1 to {MAX_SOLVER_ITERATIONS}, got {}", self.solver_iterations),
+                "use 100, the default (the solver stops earlier once its impulses settle)",
             ));
         }
         if !(self.solver_tolerance_mps > 0.0 && self.solver_tolerance_mps <= MAX_SOLVER_TOLERANCE_MPS) {

@@ -68,9 +68,30 @@ fn read_terrain_part(path: &Path) -> Result<TerrainPart> {
     }
 }
 
+/// The most cells of a DEM talus triangulates (ours: 4,000 × 4,000, about 14 GB at [`DEM_BYTES_PER_CELL`]; a 1 m
+/// DEM of a 4 km pit, or a 2 m DEM of an 8 km valley side).
+pub const MAX_DEM_CELLS: usize = 16_000_000;
+
+/// The peak memory of a run per DEM cell, bytes (measured: a 3,000 × 3,000 DEM's run peaked at 7.9 GB, 2026-12-02).
+const DEM_BYTES_PER_CELL: f64 = 880.0;
+
 /// Triangulates the DEM read from `path`, over `joined` (the grid with the cells of neighbouring tiles added, see
 /// [`join_tiles`]) when given; refuses a DEM with no triangle of its own.
 fn dem_mesh(path: &Path, grid: &Grid, joined: Option<&Grid>) -> Result<MeshData> {
+    let cells = grid.ncols * grid.nrows;
+    if cells > MAX_DEM_CELLS {
+        return Err(Error::format(
+            path.display().to_string(),
+            format!(
+                "the DEM has {} × {} = {cells} cells, more than talus triangulates ({MAX_DEM_CELLS}): it would take \
+                 about {:.0} GB of memory",
+                grid.ncols,
+                grid.nrows,
+                cells as f64 * DEM_BYTES_PER_CELL / 1e9
+            ),
+            "crop it to the slope of interest or resample it to a coarser cell, e.g. `gdalwarp -tr 2 2 in.tif out.tif`",
+        ));
+    }
     let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     // A triangle needs 3 valid nodes of a square of 4 (see grid_to_mesh).
     let valid = |c: usize, r: usize| usize::from(grid.get(c, r).is_some());
@@ -408,6 +429,7 @@ pub fn assemble_terrain(
             ));
         }
     }
+    check_spread(&format!("{}: terrain.files", scenario.display()), &vertices, &triangles)?;
     let mut terrain = Terrain::from_local(vertices, &triangles, &tri_mat, materials.to_vec()).map_err(|_| {
         Error::invalid(
             format!("{}: terrain.files", scenario.display()),
@@ -421,6 +443,31 @@ pub fn assemble_terrain(
     terrain.notes = unused_keys(&terrain, spec, &names);
     terrain.notes.extend(up_axis_note(&terrain, up));
     Ok(terrain)
+}
+
+/// Refuses triangles spread so far apart that the surface's index could not hold their bounding box
+/// ([`crate::terrain::surface::MAX_INDEX_BINS`]); `field` names the terrain in the error.
+pub fn check_spread(field: &str, vertices: &[Vector3<f64>], triangles: &[[u32; 3]]) -> Result<()> {
+    use crate::terrain::surface::{index_bins, MAX_INDEX_BINS};
+    let bins = index_bins(vertices, triangles);
+    if bins <= MAX_INDEX_BINS {
+        return Ok(());
+    }
+    let (lo, hi) = vertices
+        .iter()
+        .fold((Vector3::repeat(f64::INFINITY), -Vector3::repeat(f64::INFINITY)), |(l, h), v| (l.inf(v), h.sup(v)));
+    Err(Error::invalid(
+        field,
+        format!(
+            "the terrain's {} triangles lie far apart, over {:.3e} × {:.3e} m: indexing that would take {bins:.1e} \
+             bins (at most {MAX_INDEX_BINS:.0e})",
+            triangles.len(),
+            hi.x - lo.x,
+            hi.y - lo.y
+        ),
+        "check that every terrain file is in the same CRS and that no file holds vertices far from the rest \
+         (a vertex at 0, 0 in a georeferenced mesh, say)",
+    ))
 }
 
 /// Share of the surface's footprint that lies under other triangles, above which a run notes it, with the other up

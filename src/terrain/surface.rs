@@ -36,6 +36,27 @@ struct TriPlane {
     c: f64,
 }
 
+/// The most bins a surface's grid index may take (ours: about 3 GB; a 4,000 × 4,000 DEM takes 64 million).
+pub const MAX_INDEX_BINS: f64 = 1e8;
+
+/// About how many bins [`Surface::new`] would index `triangles` with: their bounding box over bins of half the
+/// typical triangle leg. Far above the triangle count when the triangles lie far apart (files in different CRSs,
+/// a stray vertex far from the rest), which the index cannot hold.
+pub fn index_bins(vertices: &[Vector3<f64>], triangles: &[[u32; 3]]) -> f64 {
+    let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
+    let mut area = 0.0;
+    for t in triangles {
+        let [a, b, c] = t.map(|k| vertices[k as usize]);
+        for p in [a, b, c] {
+            lo = lo.inf(&p);
+            hi = hi.sup(&p);
+        }
+        area += 0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)).abs();
+    }
+    let bin_m = (0.5 * area / triangles.len() as f64).sqrt().max(1e-3);
+    ((hi.x - lo.x) / bin_m + 1.0) * ((hi.y - lo.y) / bin_m + 1.0)
+}
+
 /// A 2.5D triangulated surface with a grid index. Build it with [`Surface::new`].
 #[derive(Debug, Clone)]
 pub struct Surface {
