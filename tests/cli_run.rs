@@ -833,6 +833,29 @@ fn models_carried_to_a_site_run_with_the_sites_terrain_rocks_and_seed_and_their_
     assert!(fitted.is_some() && drag == fitted, "the model's effects travel: {drag:?}, fitted {fitted:?}");
 }
 
+/// A bad 2DLM profile model of `talus envelope` is named by its file (its own checks name only the field), with
+/// exit 2 and nothing written.
+#[test]
+fn a_bad_profile_envelope_model_is_named_by_its_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let text =
+        std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/profile_bench.toml")).unwrap();
+    let (pa, pb) = (dir.path().join("a.toml"), dir.path().join("b.toml"));
+    std::fs::write(&pa, &text).unwrap();
+    for (from, to, field) in [
+        ("collectors_x_m = [21.547, 28.5]", "collectors_x_m = [1000.0]", "collectors_x_m[0]"),
+        ("roughness_sd_deg = 2.0", "roughness_sd_deg = -2.0", "materials.face.roughness_sd_deg"),
+    ] {
+        std::fs::write(&pb, text.replacen(from, to, 1)).unwrap();
+        let out = dir.path().join("out");
+        let o = envelope(&[&pa, &pb], &out, &["--rocks", "20"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(&format!("{}: {field}", pb.display())) && err.contains("how to fix"), "{err}");
+        assert!(!out.exists(), "{field}: output written despite the error");
+    }
+}
+
 /// A profile scenario given to a 3D command, or a 3D scenario to `talus profile`, is refused by its kind (exit 2,
 /// naming the command to use), not by its first unknown key.
 #[test]
