@@ -575,3 +575,36 @@ fn an_asset_line_or_polygon_off_the_terrain_is_refused_before_any_run() {
     let o = RunOverrides { rocks: Some(20), ..Default::default() };
     propose(&scenario(&path), &o, &dir.path().join("around"), &|_| {}, &|_, _| {}).unwrap();
 }
+
+/// `--models`: a bad value in a model file is named in that file, not in the site scenario's, with exit 2 and no
+/// run left in the output folder.
+#[test]
+fn a_bad_value_in_a_models_file_is_named_in_that_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let site = small_bench_scenario(dir.path(), "[barrier_design]\nmin_rocks = 10\n");
+    let text = std::fs::read_to_string(&site).unwrap();
+    let (good, bad) = (dir.path().join("good.toml"), dir.path().join("bad.toml"));
+    std::fs::write(&good, &text).unwrap();
+    for (value, field) in [
+        ("[simulation]\ndt_s = -1.0", "simulation.dt_s"),
+        ("[simulation.effects]\nsoft_materials = [\"nosuch\"]", "simulation.effects.soft_materials[0]"),
+        ("[materials.floor]\npreset = \"floor_all\"\ncr_mean = -0.5", "materials.floor"),
+    ] {
+        let model = if value.starts_with("[materials.floor]") {
+            text.replace("[materials.floor]\npreset = \"floor_all\"", value)
+        } else {
+            text.replace("[output]", &format!("{value}\n[output]"))
+        };
+        std::fs::write(&bad, model).unwrap();
+        let out = dir.path().join("study");
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
+            .args(["barrier", site.to_str().unwrap(), "--rocks", "10", "--out", out.to_str().unwrap(), "--models"])
+            .args([&good, &bad])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(&format!("{}: {field}", bad.display())) && err.contains("how to fix"), "{field}: {err}");
+        assert!(!out.join("models").exists(), "{field}: a model ran before the refusal");
+    }
+}
