@@ -608,3 +608,23 @@ fn a_bad_value_in_a_models_file_is_named_in_that_file() {
         assert!(!out.join("models").exists(), "{field}: a model ran before the refusal");
     }
 }
+
+/// Several models: every one is checked before the first runs, so that a model its run would refuse (here a source
+/// off the terrain, found only with the terrain loaded) leaves no run of the others behind.
+#[test]
+fn every_model_of_a_barrier_study_is_checked_before_the_first_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = small_bench_scenario(dir.path(), "[barrier_design]\nmin_rocks = 10\n");
+    let good = scenario(&path);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let within = "within = [[10.0, 35.0], [21.6, 35.0], [21.6, 65.0], [10.0, 65.0]]";
+    let off = text.replace(within, "within = [[9010.0, 35.0], [9021.6, 35.0], [9021.6, 65.0], [9010.0, 65.0]]");
+    let bad_path = dir.path().join("off.toml");
+    std::fs::write(&bad_path, off).unwrap();
+    let models = [("good".to_string(), good), ("off".to_string(), scenario(&bad_path))];
+    let out = dir.path().join("study");
+    let o = RunOverrides { rocks: Some(10), ..Default::default() };
+    let e = propose_models(&models, &o, &out, false, &|_| {}, &|_, _| {}).unwrap_err().to_string();
+    assert!(e.contains("off.toml: sources[0]"), "{e}");
+    assert!(!out.join("models").exists(), "a model ran before the refusal: {e}");
+}
