@@ -80,6 +80,18 @@ impl Error {
     pub fn invalid(field: impl Into<String>, message: impl Into<String>, hint: impl Into<String>) -> Self {
         Error::Invalid { field: field.into(), message: message.into(), hint: hint.into() }
     }
+
+    /// This error located in the file at `path`, for checks that name only the field (a profile scenario's,
+    /// say) when several files are read: an [`Error::Invalid`] whose field names no file yet (has no `": "`)
+    /// gets `path: ` before it; any other error names its file already and is returned as it is.
+    pub fn in_file(self, path: impl AsRef<Path>) -> Self {
+        match self {
+            Error::Invalid { field, message, hint } if !field.contains(": ") => {
+                Error::Invalid { field: format!("{}: {field}", path.as_ref().display()), message, hint }
+            }
+            other => other,
+        }
+    }
 }
 
 /// `v` as error messages show it: with at most 6 decimals between 0.001 and a million, otherwise in scientific
@@ -103,4 +115,20 @@ pub fn round_up_3_digits(v: f64) -> f64 {
     }
     let unit = 10f64.powi(v.log10().floor() as i32 - 2);
     (v / unit).ceil() * unit
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn in_file_names_the_file_of_a_field_that_names_none() {
+        let e = Error::invalid("collectors_x_m[0]", "is outside", "move it").in_file("b.toml");
+        assert!(e.to_string().starts_with("b.toml: collectors_x_m[0]: is outside"), "{e}");
+        // A field that names its file already, a format error and an I/O error are left as they are.
+        let e = Error::invalid("camp/release_points.csv: run 3", "is off", "fix it").in_file("b.toml");
+        assert!(e.to_string().starts_with("camp/release_points.csv: run 3:"), "{e}");
+        let e = Error::at_line("profile.csv", 4, "bad number", "fix it").in_file("b.toml");
+        assert!(e.to_string().starts_with("profile.csv:4:"), "{e}");
+    }
 }

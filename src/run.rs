@@ -267,6 +267,17 @@ pub fn setup(sc: &Scenario, overrides: &RunOverrides) -> Result<Setup> {
     Setup::new(sc, terrain, sources, overrides.seed.unwrap_or(sc.file.simulation.seed))
 }
 
+/// Checks what a run of `sc` with `overrides` checks before its first rock (the terrain with its barriers, the
+/// sources, the rock shapes, the collector lines, the raster frame) without running or writing anything, so that a
+/// command running several scenarios refuses a bad one before the first runs. Returns an empty grid of the run's
+/// raster frame.
+pub fn check_run(sc: &Scenario, overrides: &RunOverrides) -> Result<Grid> {
+    let setup = setup(sc, overrides)?;
+    crate::collector::scenario_collectors(&sc.file.collectors, &setup.terrain)?;
+    let field = format!("{}: output", sc.path.display());
+    Ok(RasterFrame::covering(&setup.terrain, &sc.file.output, &field)?.empty_grid())
+}
+
 /// Records a rock's samples (for `--paths`).
 #[derive(Debug, Default)]
 struct PathRecorder(Vec<Sample>);

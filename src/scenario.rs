@@ -415,6 +415,38 @@ impl ScenarioFile {
         })
     }
 
+    /// Checks what a model carries onto another site ([`crate::envelope::on_site`]: `talus envelope --site`,
+    /// `talus barrier --models`), its materials and its `[simulation]` engine settings (effects included), as
+    /// [`ScenarioFile::resolve`] does, naming the model's file at `path` in errors: resolved on the site, they
+    /// would be named by the site's file.
+    pub fn check_carried(&self, path: &Path) -> Result<()> {
+        let f = |k: &str| format!("{}: {k}", path.display());
+        for (name, spec) in &self.materials {
+            spec.build(name, &f(&format!("materials.{name}")))?;
+        }
+        self.check_soft_materials(&f)?;
+        let mut params = self.simulation.params.clone();
+        params.effects.fill_defaults();
+        params.validate(&f("simulation."))
+    }
+
+    /// Refuses a `simulation.effects.soft_materials` entry that names no material; `f` makes a field's name.
+    fn check_soft_materials(&self, f: &dyn Fn(&str) -> String) -> Result<()> {
+        for (i, m) in self.simulation.params.effects.soft_materials.iter().enumerate() {
+            if !self.materials.contains_key(m) {
+                return Err(Error::invalid(
+                    f(&format!("simulation.effects.soft_materials[{i}]")),
+                    format!("'{m}' is not defined (the soft-ground drag would apply nowhere)"),
+                    format!(
+                        "use one of: {} (or leave soft_materials out: the drag then applies on every material)",
+                        self.materials.keys().cloned().collect::<Vec<_>>().join(", ")
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
     /// Checks every value and resolves paths relative to the scenario file at `path`.
     pub fn resolve(self, path: &Path) -> Result<Scenario> {
         let base = path.parent().unwrap_or(Path::new("."));
@@ -486,18 +518,7 @@ impl ScenarioFile {
                 "set materials_by to group, material, file or slope, or name the material 'default'",
             ));
         }
-        for (i, m) in self.simulation.params.effects.soft_materials.iter().enumerate() {
-            if !known(m) {
-                return Err(Error::invalid(
-                    f(&format!("simulation.effects.soft_materials[{i}]")),
-                    format!("'{m}' is not defined (the soft-ground drag would apply nowhere)"),
-                    format!(
-                        "use one of: {} (or leave soft_materials out: the drag then applies on every material)",
-                        defined()
-                    ),
-                ));
-            }
-        }
+        self.check_soft_materials(&f)?;
         for (i, z) in self.terrain.zones.iter().enumerate() {
             if !known(&z.material) {
                 return Err(Error::invalid(

@@ -575,3 +575,56 @@ fn an_asset_line_or_polygon_off_the_terrain_is_refused_before_any_run() {
     let o = RunOverrides { rocks: Some(20), ..Default::default() };
     propose(&scenario(&path), &o, &dir.path().join("around"), &|_| {}, &|_, _| {}).unwrap();
 }
+
+/// `--models`: a bad value in a model file is named in that file, not in the site scenario's, with exit 2 and no
+/// run left in the output folder.
+#[test]
+fn a_bad_value_in_a_models_file_is_named_in_that_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let site = small_bench_scenario(dir.path(), "[barrier_design]\nmin_rocks = 10\n");
+    let text = std::fs::read_to_string(&site).unwrap();
+    let (good, bad) = (dir.path().join("good.toml"), dir.path().join("bad.toml"));
+    std::fs::write(&good, &text).unwrap();
+    for (value, field) in [
+        ("[simulation]\ndt_s = -1.0", "simulation.dt_s"),
+        ("[simulation.effects]\nsoft_materials = [\"nosuch\"]", "simulation.effects.soft_materials[0]"),
+        ("[materials.floor]\npreset = \"floor_all\"\ncr_mean = -0.5", "materials.floor"),
+    ] {
+        let model = if value.starts_with("[materials.floor]") {
+            text.replace("[materials.floor]\npreset = \"floor_all\"", value)
+        } else {
+            text.replace("[output]", &format!("{value}\n[output]"))
+        };
+        std::fs::write(&bad, model).unwrap();
+        let out = dir.path().join("study");
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
+            .args(["barrier", site.to_str().unwrap(), "--rocks", "10", "--out", out.to_str().unwrap(), "--models"])
+            .args([&good, &bad])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(&format!("{}: {field}", bad.display())) && err.contains("how to fix"), "{field}: {err}");
+        assert!(!out.join("models").exists(), "{field}: a model ran before the refusal");
+    }
+}
+
+/// Several models: every one is checked before the first runs, so that a model its run would refuse (here a source
+/// off the terrain, found only with the terrain loaded) leaves no run of the others behind.
+#[test]
+fn every_model_of_a_barrier_study_is_checked_before_the_first_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = small_bench_scenario(dir.path(), "[barrier_design]\nmin_rocks = 10\n");
+    let good = scenario(&path);
+    let text = std::fs::read_to_string(&path).unwrap();
+    let within = "within = [[10.0, 35.0], [21.6, 35.0], [21.6, 65.0], [10.0, 65.0]]";
+    let off = text.replace(within, "within = [[9010.0, 35.0], [9021.6, 35.0], [9021.6, 65.0], [9010.0, 65.0]]");
+    let bad_path = dir.path().join("off.toml");
+    std::fs::write(&bad_path, off).unwrap();
+    let models = [("good".to_string(), good), ("off".to_string(), scenario(&bad_path))];
+    let out = dir.path().join("study");
+    let o = RunOverrides { rocks: Some(10), ..Default::default() };
+    let e = propose_models(&models, &o, &out, false, &|_| {}, &|_, _| {}).unwrap_err().to_string();
+    assert!(e.contains("off.toml: sources[0]"), "{e}");
+    assert!(!out.join("models").exists(), "a model ran before the refusal: {e}");
+}

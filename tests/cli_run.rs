@@ -833,6 +833,68 @@ fn models_carried_to_a_site_run_with_the_sites_terrain_rocks_and_seed_and_their_
     assert!(fitted.is_some() && drag == fitted, "the model's effects travel: {drag:?}, fitted {fitted:?}");
 }
 
+/// A bad later model of `talus envelope` is refused with exit 2 before any model runs (its output folder holds no
+/// run), and the message names the file that holds the bad value: the model's, also when its values are carried
+/// onto a `--site`.
+#[test]
+fn a_bad_envelope_model_is_named_by_its_file_and_refused_before_any_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let [site, a, b] = ["site", "a", "b"].map(|n| dir.path().join(n));
+    for d in [&site, &a, &b] {
+        std::fs::create_dir_all(d).unwrap();
+    }
+    let (ss, sa, sb) =
+        (scenario(&site, "", 0.3, "100.0"), scenario(&a, "", 0.3, "100.0"), scenario(&b, "", 0.3, "100.0"));
+    let text = std::fs::read_to_string(&sb).unwrap();
+    let refused = |args: &[&str], out: &Path, needle: &str| {
+        let o = envelope(&[&sa, &sb], out, args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(needle) && err.contains("how to fix") && !err.contains("panicked"), "{needle}: {err}");
+        assert!(!out.join("models").exists(), "a model ran before the refusal: {err}");
+    };
+    // A source off the terrain, found only with the terrain loaded: model a must not run first.
+    std::fs::write(
+        &sb,
+        text.replace(
+            "[[500004.0, 5000010.0], [500004.0, 5000030.0]]",
+            "[[600004.0, 5000010.0], [600004.0, 5000030.0]]",
+        ),
+    )
+    .unwrap();
+    refused(&["--rocks", "4"], &dir.path().join("off"), &format!("{}: sources[0]", sb.display()));
+    // A bad engine setting of a model carried onto a site: named in the model's file, not the site's.
+    std::fs::write(&sb, text.replace("seed = 3", "seed = 3\ndt_s = -1.0")).unwrap();
+    let site_args = ["--rocks", "4", "--site", ss.to_str().unwrap()];
+    refused(&site_args, &dir.path().join("dt"), &format!("{}: simulation.dt_s", sb.display()));
+    let soft = "seed = 3\n[simulation.effects]\nsoft_materials = [\"nosuch\"]";
+    std::fs::write(&sb, text.replace("seed = 3", soft)).unwrap();
+    refused(&site_args, &dir.path().join("soft"), &format!("{}: simulation.effects.soft_materials[0]", sb.display()));
+}
+
+/// A bad 2DLM profile model of `talus envelope` is named by its file (its own checks name only the field), with
+/// exit 2 and nothing written.
+#[test]
+fn a_bad_profile_envelope_model_is_named_by_its_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let text =
+        std::fs::read_to_string(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("examples/profile_bench.toml")).unwrap();
+    let (pa, pb) = (dir.path().join("a.toml"), dir.path().join("b.toml"));
+    std::fs::write(&pa, &text).unwrap();
+    for (from, to, field) in [
+        ("collectors_x_m = [21.547, 28.5]", "collectors_x_m = [1000.0]", "collectors_x_m[0]"),
+        ("roughness_sd_deg = 2.0", "roughness_sd_deg = -2.0", "materials.face.roughness_sd_deg"),
+    ] {
+        std::fs::write(&pb, text.replacen(from, to, 1)).unwrap();
+        let out = dir.path().join("out");
+        let o = envelope(&[&pa, &pb], &out, &["--rocks", "20"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(&format!("{}: {field}", pb.display())) && err.contains("how to fix"), "{err}");
+        assert!(!out.exists(), "{field}: output written despite the error");
+    }
+}
+
 /// A profile scenario given to a 3D command, or a 3D scenario to `talus profile`, is refused by its kind (exit 2,
 /// naming the command to use), not by its first unknown key.
 #[test]

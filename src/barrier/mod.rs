@@ -153,8 +153,27 @@ pub fn propose(
 /// materials and engine settings (see [`crate::envelope::on_site`]); the first one's terrain, sources and
 /// `[barrier_design]` are used. Each model runs the same rocks without and with the proposal; the sizing takes
 /// them all ([`design::assess`]). With `floor` (and more than one model), the same study of the first model with
-/// as many seeds (the first the models' seed) goes to `out_dir/floor/`.
+/// as many seeds (the first the models' seed) goes to `out_dir/floor/`. With several models, every one is checked
+/// ([`crate::run::check_run`]) before anything runs or is written, so that a bad one leaves no run behind.
 pub fn propose_models(
+    models: &[(String, Scenario)],
+    overrides: &RunOverrides,
+    out_dir: &Path,
+    floor: bool,
+    stage: &dyn Fn(&str),
+    progress: &dyn Fn(usize, usize),
+) -> Result<BarrierStudy> {
+    if models.len() > 1 {
+        stage("checking the models");
+        for (_, msc) in models {
+            crate::run::check_run(msc, overrides)?;
+        }
+    }
+    propose_checked(models, overrides, out_dir, floor, stage, progress)
+}
+
+/// [`propose_models`] on models already checked (a floor's are the first model with other seeds).
+fn propose_checked(
     models: &[(String, Scenario)],
     overrides: &RunOverrides,
     out_dir: &Path,
@@ -250,7 +269,7 @@ pub fn propose_models(
         stage(&format!("the floor: model {} with seeds {seed} to {}", models[0].0, seed.wrapping_add(n as u64 - 1)));
         let o = RunOverrides { seed: None, ..overrides.clone() };
         let seeds = seed_floor(sc, seed, n);
-        Some(Box::new(propose_models(&seeds, &o, &out_dir.join("floor"), false, stage, progress)?))
+        Some(Box::new(propose_checked(&seeds, &o, &out_dir.join("floor"), false, stage, progress)?))
     } else {
         None
     };

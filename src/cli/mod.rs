@@ -52,7 +52,8 @@ impl RunControl {
 
 /// The named models of `paths` (names by [`talus::envelope::model_names`]), each read and resolved, or, with a
 /// `site` (its file and path), carried onto it by [`talus::envelope::on_site`] (`talus envelope --site`,
-/// `talus barrier --models`); `command` names the command in messages.
+/// `talus barrier --models`); `command` names the command in messages. A value a model carries onto the site (its
+/// materials and engine settings) is checked and named in the model's file.
 pub fn load_models(
     paths: &[std::path::PathBuf],
     site: Option<(&talus::scenario::ScenarioFile, &std::path::Path)>,
@@ -65,6 +66,9 @@ pub fn load_models(
         let scenario = match site {
             None => model.resolve(path)?,
             Some((site, site_path)) => {
+                // What the model carries is checked in its own file, so that a bad value there is not blamed on
+                // the site's.
+                model.check_carried(path)?;
                 talus::envelope::on_site(site, &model, &path.display().to_string())?.resolve(site_path)?
             }
         };

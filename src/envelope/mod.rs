@@ -7,13 +7,12 @@ pub mod profile;
 
 use crate::collector::facts::CollectorFacts;
 use crate::error::{Error, Result};
-use crate::hazard::grid::RasterFrame;
 use crate::raster::Grid;
 use crate::report::maps;
 use crate::run::{quantile_sorted, run_scenario_with, RunExtras, RunOverrides, Stats, RASTERS};
 use crate::scenario::{Scenario, ScenarioFile};
 use serde::Serialize;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// The statistics over models written for each raster (file-name suffixes): the lowest, median and highest value
@@ -230,32 +229,17 @@ pub fn check_frame(a: &Grid, name_a: &str, b: &Grid, name_b: &str) -> Result<()>
     ))
 }
 
-/// Refuses, before anything runs, a model whose rasters would not cover the first model's cells ([`check_frame`]
-/// after the runs would find it only when every model has run). A model with the first's terrain files, terrain
-/// settings and cell size covers its cells without loading the terrain again.
-fn check_frames_before(models: &[(Scenario, String)]) -> Result<()> {
-    let key = |sc: &Scenario| {
-        let files: Vec<PathBuf> =
-            sc.terrain_files.iter().map(|p| p.canonicalize().unwrap_or_else(|_| p.clone())).collect();
-        let mut terrain = sc.file.terrain.clone();
-        terrain.files.clear();
-        let output = &sc.file.output;
-        (files, serde_json::to_string(&terrain).unwrap_or_default(), output.cell_size_m.to_bits(), output.align_to_dem)
-    };
-    let frame = |sc: &Scenario| -> Result<Grid> {
-        let field = format!("{}: output", sc.path.display());
-        Ok(RasterFrame::covering(&crate::run::load_terrain(sc)?, &sc.file.output, &field)?.empty_grid())
-    };
-    let (first, first_name) = &models[0];
-    let first_key = key(first);
+/// Refuses, before anything runs or is written, a model that its run would refuse ([`crate::run::check_run`]: its
+/// terrain, sources, rocks, collectors and raster frame), so that a bad model leaves no run of the others behind,
+/// or whose rasters would not cover the first model's cells ([`check_frame`] after the runs would find it only
+/// when every model has run).
+fn check_models_before(models: &[(Scenario, String)], overrides: &RunOverrides) -> Result<()> {
     let mut first_frame = None;
-    for (sc, name) in &models[1..] {
-        if key(sc) != first_key {
-            let a = match &first_frame {
-                Some(a) => a,
-                None => first_frame.insert(frame(first)?),
-            };
-            check_frame(a, first_name, &frame(sc)?, name)?;
+    for (sc, name) in models {
+        let frame = crate::run::check_run(sc, overrides)?;
+        match &first_frame {
+            None => first_frame = Some(frame),
+            Some(first) => check_frame(first, &models[0].1, &frame, name)?,
         }
     }
     Ok(())
@@ -324,7 +308,7 @@ pub fn run_envelope(
             "give two or more scenario files, e.g. every fold_*/calibrated.toml of `talus calibrate --kfold`",
         ));
     }
-    check_frames_before(models)?;
+    check_models_before(models, overrides)?;
     let seed = overrides.seed.unwrap_or(models[0].0.file.simulation.seed);
     let runs: Vec<Member> =
         models.iter().map(|(scenario, name)| Member { scenario, name: name.clone(), seed }).collect();
@@ -398,7 +382,7 @@ fn envelope_of(
             collectors: s.collectors.clone(),
             warnings: s.warnings.clone(),
         });
-        // The frames agree: checked before the runs (`check_frames_before`), and again by `combine`.
+        // The frames agree: checked before the runs (`check_models_before`), and again by `combine`.
         if first.is_none() {
             first = Some(run);
         }

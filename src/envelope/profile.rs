@@ -149,10 +149,14 @@ pub fn run_profile_envelope(
 /// `collectors_x_m`.
 ///
 /// # Errors
-/// A scenario does not resolve, or differs from the first in one of these.
+/// A scenario does not resolve (named by its file), or differs from the first in one of these.
 fn check_profiles_before(scenarios: &[(ProfileScenario, String)]) -> Result<()> {
     let key = |sc: &ProfileScenario| -> Result<Vec<u64>> {
-        let resolved = sc.resolve()?;
+        // Named by its file: the scenario's own checks name only the field.
+        let resolved = sc.resolve().map_err(|e| match &sc.source {
+            Some(file) => e.in_file(file),
+            None => e,
+        })?;
         let p = resolved.slope.profile();
         let vertices = (0..=p.n_segments()).flat_map(|i| p.vertex(i));
         let spacing = std::iter::once(sc.envelope_spacing_m);
