@@ -365,7 +365,7 @@ pub fn run_setup(
     let cell = sc.file.output.cell_size_m;
     let frame = RasterFrame::covering(&setup.terrain, &sc.file.output, &format!("{}: output", sc.path.display()))?;
     let earlier_outputs = earlier_run_outputs(out_dir);
-    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    crate::io::create_folder(out_dir)?;
     let n = setup.rock_count();
     let threads = overrides.threads.or(sc.file.simulation.threads).unwrap_or(0);
     let n_paths = overrides.paths.unwrap_or(sc.file.output.paths).min(n);

@@ -456,6 +456,14 @@ impl ScenarioFile {
         }
         let terrain_files: Vec<PathBuf> = self.terrain.files.iter().map(|p| base.join(p)).collect();
         for (i, p) in terrain_files.iter().enumerate() {
+            if p.is_dir() {
+                return Err(Error::invalid(
+                    f(&format!("terrain.files[{i}]")),
+                    format!("{} is a folder, not a terrain file", p.display()),
+                    "list the terrain files themselves (.obj, .stl, .tif/.tiff or .asc), not the folder that holds \
+                     them",
+                ));
+            }
             if !p.is_file() {
                 return Err(Error::invalid(
                     f(&format!("terrain.files[{i}]")),

@@ -1064,6 +1064,49 @@ fn command_line_calibrates_a_profile_campaign_and_reports_bad_input_with_exit_co
     assert!(String::from_utf8_lossy(&o.stderr).contains("repeatz"));
 }
 
+/// A value given by a flag is blamed on the flag (it was `settings: repeats` with no settings file), and an output
+/// folder that cannot be made is named with a fix (it had none).
+#[test]
+fn a_bad_flag_value_names_the_flag_and_an_output_folder_that_cannot_be_made_a_fix() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    write_profile_campaign(d);
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_talus"))
+            .arg("calibrate")
+            .arg(d)
+            .arg("--terrain")
+            .arg(d.join("profile.csv"))
+            .args(["--model", "2dlm"])
+            .args(args)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let out = d.join("out");
+    let out_arg = out.to_str().unwrap();
+    let err = run(&["--repeats", "2", "--out", out_arg]);
+    assert!(err.starts_with("error: --repeats: 2 is too few") && err.contains("how to fix"), "{err}");
+    let err = run(&["--repeats", "3", "--out", out_arg]);
+    assert!(err.contains("search_repeats: must be in [1, --repeats = 3]"), "{err}");
+    let err = run(&["--kfold", "5", "--kfold-repeats", "0", "--out", out_arg]);
+    assert!(err.starts_with("error: --kfold-repeats: must be in [1, 10], got 0"), "{err}");
+    // The same value from a settings file is named as its key there.
+    std::fs::write(d.join("settings.toml"), "repeats = 2\n").unwrap();
+    let err = run(&["--config", d.join("settings.toml").to_str().unwrap(), "--out", out_arg]);
+    assert!(err.contains("settings.toml: repeats: 2 is too few"), "{err}");
+    assert!(!out.exists());
+    // /proc takes no new folder, not even from root.
+    if std::path::Path::new("/proc/self").is_dir() {
+        let err = run(&["--out", "/proc/talus_no_such_folder"]);
+        assert!(
+            err.contains("/proc/talus_no_such_folder: cannot create this folder") && err.contains("how to fix"),
+            "{err}"
+        );
+    }
+}
+
 /// Tracks with Gaussian noise of sd 0.1 m on every height: the true model, its simulated paths read as they
 /// are, falls short of the inflated observed rebounds; read at the tracks' times with the same noise
 /// (`track_noise_m = 0.1`) it meets them (rebound CRPS 0.129 against 0.071 m), and the run-outs draw the same numbers.

@@ -496,6 +496,59 @@ fn bad_input_is_answered_with_where_what_and_how() {
     assert_eq!(err.matches("os error").count(), 1, "{err}");
 }
 
+/// Runs `talus ARGS`, expected to fail: exit code 2, every `needles` in stderr with a fix, `out` not written.
+fn command_fails_cleanly(args: &[&str], out: &Path, needles: &[&str]) {
+    let o = talus().args(args).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {err}");
+    for n in needles {
+        assert!(err.contains(n), "stderr lacks '{n}': {err}");
+    }
+    assert!(err.contains("how to fix"), "no fix suggested: {err}");
+    assert!(!out.exists(), "{} written despite the error", out.display());
+}
+
+/// A folder given as a terrain file is called a folder (it was "does not exist", or "unknown terrain file type
+/// '.'"); an output folder that cannot be made is named with a fix (it had none); a bench mesh too large for its
+/// benches blames `--benches` with the most allowed (it blamed `--max-edge-m`, which was not given).
+#[test]
+fn a_terrain_folder_an_output_folder_that_cannot_be_made_and_too_many_benches_are_explained() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("tiles")).unwrap();
+    let sc = scenario(d, "", 0.3, "300.0");
+    let text = std::fs::read_to_string(&sc).unwrap().replace("files = [\"slope.asc\"]", "files = [\"tiles\"]");
+    std::fs::write(&sc, text).unwrap();
+    fails_cleanly(d, &sc, &["terrain.files[0]", "tiles is a folder, not a terrain file"]);
+    let out = d.join("sec/a.csv");
+    let (tiles, out_arg) = (d.join("tiles"), out.to_str().unwrap());
+    let section = ["section", tiles.to_str().unwrap(), "--line", "500004,5000020,500070,5000020", "--out", out_arg];
+    command_fails_cleanly(&section, &out, &["tiles: is a folder, not a terrain file", "give a terrain file"]);
+    // /proc takes no new folder, not even from root.
+    if Path::new("/proc/self").is_dir() {
+        let slope = d.join("slope.asc");
+        let no_folder = Path::new("/proc/talus_no_such_folder");
+        let out = no_folder.join("a.csv");
+        let section = ["section", slope.to_str().unwrap(), "--line", "500004,5000020,500070,5000020"];
+        let args = [&section[..], &["--out", out.to_str().unwrap()]].concat();
+        command_fails_cleanly(
+            &args,
+            &out,
+            &["/proc/talus_no_such_folder: cannot create this folder", "how to fix: check the path"],
+        );
+        let out = no_folder.join("b.obj");
+        let args = ["mesh", "bench", "--out", out.to_str().unwrap()];
+        command_fails_cleanly(
+            &args,
+            &out,
+            &["/proc/talus_no_such_folder: cannot create this folder", "how to fix: check the path"],
+        );
+    }
+    let out = d.join("mesh/many.obj");
+    let args = ["mesh", "bench", "--benches", "100000", "--out", out.to_str().unwrap()];
+    command_fails_cleanly(&args, &out, &["--benches: 100000 benches", "give at most 9"]);
+}
+
 /// A closed standard output (`talus run ... | head -1`) neither panics nor stops the run short of its files.
 #[test]
 fn a_closed_standard_output_does_not_stop_the_run() {

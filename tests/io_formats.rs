@@ -217,6 +217,127 @@ fn geotiff_int16_f64_pixel_is_point_and_errors() {
     assert!(err.contains("junk.tif"), "{err}");
 }
 
+/// A little-endian float32 TIFF of `width` × `height` pixels, cut into `chunk_w` × `chunk_h` tiles (or strips of
+/// `chunk_h` rows when `tiled` is false) as GDAL writes a sparse file (`SPARSE_OK=TRUE`): a chunk for which `value`
+/// gives `None` at its top-left pixel is not written (offset 0, 0 bytes); the others hold `value` (padded with 0).
+fn sparse_tiff(
+    width: u32,
+    height: u32,
+    tiled: bool,
+    (chunk_w, chunk_h): (u32, u32),
+    nodata: Option<&str>,
+    value: impl Fn(u32, u32) -> Option<f32>,
+) -> Vec<u8> {
+    let chunk_w = if tiled { chunk_w } else { width };
+    let (across, down) = (width.div_ceil(chunk_w), height.div_ceil(chunk_h));
+    let mut bytes = b"II*\0\0\0\0\0".to_vec();
+    let (mut offsets, mut counts) = (Vec::new(), Vec::new());
+    for chunk in 0..across * down {
+        let (x0, y0) = ((chunk % across) * chunk_w, (chunk / across) * chunk_h);
+        if value(x0, y0).is_none() {
+            offsets.push(0u32);
+            counts.push(0u32);
+            continue;
+        }
+        // A tile is padded to its full size; a strip (the last one may be short) is not.
+        let rows = if tiled { chunk_h } else { chunk_h.min(height - y0) };
+        offsets.push(bytes.len() as u32);
+        counts.push(rows * chunk_w * 4);
+        for y in y0..y0 + rows {
+            for x in x0..x0 + chunk_w {
+                let v = if x < width && y < height { value(x, y).unwrap_or(0.0) } else { 0.0 };
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    // Tag entries: (tag, type, count, value bytes); types 2 ASCII, 3 SHORT, 4 LONG, 12 DOUBLE.
+    let short = |v: u16| (3u16, 1u32, v.to_le_bytes().to_vec());
+    let long = |v: u32| (4u16, 1u32, v.to_le_bytes().to_vec());
+    let longs = |v: &[u32]| (4u16, v.len() as u32, v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>());
+    let doubles = |v: &[f64]| (12u16, v.len() as u32, v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>());
+    let mut tags = vec![
+        (256u16, long(width)),
+        (257, long(height)),
+        (258, short(32)),
+        (259, short(1)),
+        (262, short(1)),
+        (277, short(1)),
+        (284, short(1)),
+        (339, short(3)),
+        (33550, doubles(&[2.0, 2.0, 0.0])),
+        (33922, doubles(&[0.0, 0.0, 0.0, 1000.0, 2000.0, 0.0])),
+    ];
+    if tiled {
+        tags.extend([(322, long(chunk_w)), (323, long(chunk_h)), (324, longs(&offsets)), (325, longs(&counts))]);
+    } else {
+        tags.extend([(273, longs(&offsets)), (278, long(chunk_h)), (279, longs(&counts))]);
+    }
+    if let Some(text) = nodata {
+        let mut ascii = text.as_bytes().to_vec();
+        ascii.push(0);
+        tags.push((42113, (2, ascii.len() as u32, ascii)));
+    }
+    tags.sort_by_key(|t| t.0);
+    // Values longer than 4 bytes go before the directory.
+    let mut entries = Vec::new();
+    for (tag, (kind, count, mut data)) in tags {
+        if data.len() > 4 {
+            if bytes.len() % 2 == 1 {
+                bytes.push(0);
+            }
+            let at = bytes.len() as u32;
+            bytes.extend_from_slice(&data);
+            data = at.to_le_bytes().to_vec();
+        }
+        data.resize(4, 0);
+        entries.push((tag, kind, count, data));
+    }
+    if bytes.len() % 2 == 1 {
+        bytes.push(0);
+    }
+    let ifd = bytes.len() as u32;
+    bytes[4..8].copy_from_slice(&ifd.to_le_bytes());
+    bytes.extend_from_slice(&(entries.len() as u16).to_le_bytes());
+    for (tag, kind, count, data) in entries {
+        bytes.extend_from_slice(&tag.to_le_bytes());
+        bytes.extend_from_slice(&kind.to_le_bytes());
+        bytes.extend_from_slice(&count.to_le_bytes());
+        bytes.extend_from_slice(&data);
+    }
+    bytes.extend_from_slice(&0u32.to_le_bytes());
+    bytes
+}
+
+/// A valid sparse GeoTIFF (GDAL's `SPARSE_OK=TRUE`: blocks never written have offset 0 and 0 bytes) reads its
+/// missing blocks as nodata, or as 0 without a nodata value, as GDAL does; it was called truncated.
+#[test]
+fn a_sparse_geotiff_reads_its_missing_blocks_as_nodata_or_0() {
+    let dir = tempfile::tempdir().unwrap();
+    let height = |x: u32, y: u32| 100.0 + x as f32 + 0.5 * y as f32;
+    // 20 × 20 pixels in 16 × 16 tiles: the top-left and the bottom-right (partial) tiles are written, the others not.
+    let diagonal = |x: u32, y: u32| ((x < 16) == (y < 16)).then(|| height(x, y));
+    for (nodata, missing) in [(Some("-9999"), f32::NAN), (None, 0.0)] {
+        let path = p(dir.path(), "sparse_tiles.tif");
+        std::fs::write(&path, sparse_tiff(20, 20, true, (16, 16), nodata, diagonal)).unwrap();
+        let g = geotiff::read_dem(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((g.ncols, g.nrows, g.x_min_m, g.y_max_m), (20, 20, 1000.0, 2000.0));
+        let want: Vec<f32> = (0..400).map(|i| diagonal(i % 20, i / 20).unwrap_or(missing)).collect();
+        assert!(same_values(&g.values, &want), "tiles, nodata {nodata:?}: {:?}", g.values);
+    }
+    // 5 × 7 pixels in strips of 3 rows: the middle strip is missing, the last one (1 row) is written.
+    let middle = |x: u32, y: u32| (!(3..6).contains(&y)).then(|| height(x, y));
+    let path = p(dir.path(), "sparse_strips.tif");
+    std::fs::write(&path, sparse_tiff(5, 7, false, (5, 3), Some("-9999"), middle)).unwrap();
+    let g = geotiff::read_dem(&path).unwrap_or_else(|e| panic!("{e}"));
+    let want: Vec<f32> = (0..35).map(|i| middle(i % 5, i / 5).unwrap_or(f32::NAN)).collect();
+    assert!(same_values(&g.values, &want), "strips: {:?}", g.values);
+    // A file with every block written reads as before.
+    let full = p(dir.path(), "full.tif");
+    std::fs::write(&full, sparse_tiff(20, 20, true, (16, 16), None, |x, y| Some(height(x, y)))).unwrap();
+    let g = geotiff::read_dem(&full).unwrap();
+    assert!(same_values(&g.values, &(0..400).map(|i| height(i % 20, i / 20)).collect::<Vec<_>>()));
+}
+
 #[test]
 fn geotiff_checked_by_gdalinfo() {
     if !have("gdalinfo") {

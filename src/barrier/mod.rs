@@ -203,7 +203,7 @@ fn propose_checked(
     let cand_cols: Vec<Collector> =
         candidates.iter().map(|c| Collector::new(c.name.clone(), c.line_m.clone(), spec.segment_m)).collect();
     let offset = crate::collector::scenario_collectors(&sc.file.collectors, &terrain)?.len();
-    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    crate::io::create_folder(out_dir)?;
     let n = models.len();
     let of_model = |name: &str| if n == 1 { String::new() } else { format!(" (model {name})") };
 

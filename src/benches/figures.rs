@@ -42,7 +42,7 @@ fn percent(k: usize, n: usize) -> (f64, (f64, f64)) {
 /// relative to `out_dir`.
 pub fn write_per_bench(result: &StudyResult, out_dir: &Path) -> Result<Vec<String>> {
     let dir = out_dir.join("per_bench");
-    std::fs::create_dir_all(&dir).map_err(|e| crate::Error::io(&dir, e))?;
+    crate::io::create_folder(&dir)?;
     let n = result.config.n_benches;
     let mut categories: Vec<String> = (1..=n).map(|k| format!("bench {k}")).collect();
     categories.push(format!("past bench {n}"));

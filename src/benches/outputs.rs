@@ -148,7 +148,7 @@ fn io_err(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
 /// # Errors
 /// I/O errors.
 pub fn write_outputs(result: &StudyResult, records: Option<&[HistoricRecord]>, out_dir: &Path) -> Result<StudySummary> {
-    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    crate::io::create_folder(out_dir)?;
     let cfg = &result.config;
     let mut outputs = Vec::new();
 

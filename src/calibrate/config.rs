@@ -670,7 +670,16 @@ impl CalibrationConfig {
 
     /// Checks ranges; `source` prefixes field names.
     pub fn validate(&self, source: &str) -> Result<()> {
-        let f = |name: &str| format!("{source}: {name}");
+        self.validate_with_flags(source, &[])
+    }
+
+    /// [`CalibrationConfig::validate`], naming each key of `flags` (`(key, flag)`, e.g. `("repeats", "--repeats")`)
+    /// by the command-line flag that set it, so that a message blames what the user typed.
+    pub fn validate_with_flags(&self, source: &str, flags: &[(&str, &str)]) -> Result<()> {
+        let flag = |name: &str| flags.iter().find(|(key, _)| *key == name).map(|(_, flag)| flag.to_string());
+        // A key as a message's field (`source: key` or the flag) and as a message's text (`key` or the flag).
+        let f = |name: &str| flag(name).unwrap_or_else(|| format!("{source}: {name}"));
+        let key = |name: &str| flag(name).unwrap_or_else(|| name.to_string());
         crate::parallel::check_threads(&f("threads"), self.threads)?;
         if self.repeats < 3 {
             return Err(Error::invalid(
@@ -689,9 +698,10 @@ impl CalibrationConfig {
         if self.search_repeats == 0 || self.search_repeats > self.repeats {
             return Err(Error::invalid(
                 f("search_repeats"),
-                format!("must be in [1, repeats = {}], got {}", self.repeats, self.search_repeats),
+                format!("must be in [1, {} = {}], got {}", key("repeats"), self.repeats, self.search_repeats),
                 format!(
-                    "give repeats at least {} (20 or more is advised), or search_repeats at most {}",
+                    "give {} at least {} (20 or more is advised), or search_repeats at most {}",
+                    key("repeats"),
                     self.search_repeats.max(1),
                     self.repeats
                 ),
@@ -700,8 +710,8 @@ impl CalibrationConfig {
         if !(1..=self.repeats).contains(&self.screen_repeats()) {
             return Err(Error::invalid(
                 f("effects.screen_repeats"),
-                format!("must be in [1, repeats = {}], got {}", self.repeats, self.screen_repeats()),
-                "leave it out (it then equals repeats) or use at most repeats, for example 20",
+                format!("must be in [1, {} = {}], got {}", key("repeats"), self.repeats, self.screen_repeats()),
+                format!("leave it out (it then equals repeats) or use at most {}, for example 20", key("repeats")),
             ));
         }
         if !(1..=MAX_SEARCH_STARTS).contains(&self.search_starts) {

@@ -424,7 +424,7 @@ pub fn calibrate(
     report.timing.final_evaluation_s = report.timing.total_s - t_loop;
     report.timing.simulations = ctx.simulations.load(std::sync::atomic::Ordering::Relaxed);
     if let Some(dir) = out {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        crate::io::create_folder(dir)?;
         let scenario = model.scenario_files(&final_c, cfg.repeats, cfg.seed, dir)?;
         report::write_report(
             dir,

@@ -211,7 +211,7 @@ pub fn write_report(
     zone: Option<&ZoneCheck>,
     scenario: &[(String, String)],
 ) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    crate::io::create_folder(dir)?;
     crate::io::write_json_atomic(&dir.join("report.json"), report)?;
     let runs = model.runs();
     write_runs_csv(&dir.join("runs.csv"), model, base_cal, final_cal, base_hold, final_hold)?;

@@ -14,7 +14,7 @@ use super::model3d::Model3d;
 use super::params::{Candidate, EffectSpec, Params, Region};
 use super::runs::{assign_groups, FieldRun};
 use crate::campaign::TrackPoint;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::lumped2d::{Options2d, Profile};
 use crate::random::{standard_normal, stream, uniform, TruncNormal};
 use crate::rock::{RockBody, RockSize, ShapeKind};
@@ -639,7 +639,7 @@ pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path, track_point_noise_
     for (id, (mass_kg, size_m)) in blocks {
         block_csv += &format!("{id},{mass_kg},{}\n", size_m.map(|v| v.to_string()).join(","));
     }
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    crate::io::create_folder(dir)?;
     for (name, text) in
         [("release_points.csv", release), ("observed_deposition.csv", rest), ("block_metadata.csv", block_csv)]
     {
@@ -675,7 +675,7 @@ pub fn write_profile_campaign(spec: &Synthetic2d, dir: &Path, track_point_noise_
 /// The campaign cannot be simulated, or a file cannot be written.
 pub fn write_terrain_campaign(spec: &Synthetic3d, dir: &Path, track_point_noise_m: f64, sim: &SimParams) -> Result<()> {
     let model = synthetic_3d(spec, sim.clone())?;
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    crate::io::create_folder(dir)?;
     // The terrain's horizontal extent in the campaign's frame, a millimetre inside its edges.
     let t = model.terrain();
     let (x0, y0, x1, y1) = t.surface.bounds_xy();

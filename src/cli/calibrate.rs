@@ -1,6 +1,5 @@
 //! `talus calibrate`.
 
-use anyhow::Context;
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -87,7 +86,17 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     if let Some(t) = a.threads {
         cfg.threads = t;
     }
-    cfg.validate(&source)?;
+    // A value given by a flag is named by the flag, not as a key of the settings file.
+    let flags: Vec<(&str, &str)> = [
+        ("repeats", a.repeats.is_some(), "--repeats"),
+        ("outer_repeats", a.kfold_repeats.is_some(), "--kfold-repeats"),
+        ("threads", a.threads.is_some(), "--threads"),
+    ]
+    .into_iter()
+    .filter(|&(_, given, _)| given)
+    .map(|(key, _, flag)| (key, flag))
+    .collect();
+    cfg.validate_with_flags(&source, &flags)?;
     super::check_out_folder("--out", &a.out)?;
     let model = calibrate::open_model(&a.campaign, &a.terrain, kind, &cfg, &source)?;
     let runs = model.runs();
@@ -103,7 +112,7 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     }
     let held_out = a.holdout.as_ref().map(|p| split::read_holdout(p, runs).map(|h| (p, h))).transpose()?;
     let earlier = calibrate::outputs::EarlierOutputs::list(&a.out);
-    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    talus::io::create_folder(&a.out)?;
     let t0 = Instant::now();
     let log = move |msg: &str| eprintln!("[{:6.1} s] {msg}", t0.elapsed().as_secs_f64());
     for note in model.input_notes() {

@@ -76,7 +76,7 @@ pub fn run(a: MeshArgs) -> anyhow::Result<()> {
             super::check_out_file("--out", &b.out, Some(if b.two_d { "csv" } else { "obj" }), &[])?;
             g.validate("").map_err(as_flags)?;
             if let Some(dir) = b.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir)?;
+                talus::io::create_folder(dir)?;
             }
             if b.two_d {
                 talus::terrain::bench::write_profile_csv(&g, &b.out)?;

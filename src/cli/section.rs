@@ -67,7 +67,7 @@ pub fn run(a: SectionArgs) -> anyhow::Result<()> {
     let profile = section_from_mesh(&mesh, up, &line, a.spacing_m, &materials)
         .with_context(|| format!("cutting a section from {}", a.terrain.display()))?;
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        talus::io::create_folder(dir)?;
     }
     profile.write_csv(&a.out)?;
     let (x0, x1) = profile.x_range_m();

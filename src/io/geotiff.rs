@@ -4,7 +4,9 @@
 //! The first band of the first image is read and converted to `f32`: sample formats f32, f64, f16 and signed or
 //! unsigned integers of 8 to 64 bits, stripped or tiled, with any compression and predictor the `tiff` crate
 //! decodes (none, LZW, Deflate, PackBits; horizontal and floating-point predictors). The GDAL_NODATA value and any
-//! non-finite value become `NaN`. A colour image (RGB or RGBA) is refused: its bands are not heights.
+//! non-finite value become `NaN`. A colour image (RGB or RGBA) is refused: its bands are not heights. In a sparse
+//! file (GDAL's `SPARSE_OK=TRUE`) a strip or tile of 0 bytes is a missing block: nodata, or 0 without a nodata value,
+//! as GDAL reads it.
 //!
 //! Georeferencing comes from ModelPixelScale + ModelTiepoint, or from a ModelTransformation without rotation or
 //! shear. With `GTRasterTypeGeoKey = RasterPixelIsPoint` the tie point is a pixel centre, and the grid is shifted
@@ -142,8 +144,13 @@ fn read(path: &Path, as_dem: bool) -> Result<Grid> {
         None => None,
     };
 
-    let data = dec.read_image().map_err(|e| tiff_error(path, e))?;
-    let mut values = first_band(path, data, npix, nodata)?;
+    let mut values = match empty_chunks(&mut dec, path)? {
+        Some(chunk_bytes) => read_sparse(&mut dec, path, (ncols, nrows), nodata, &chunk_bytes)?,
+        None => {
+            let data = dec.read_image().map_err(|e| tiff_error(path, e))?;
+            first_band(path, data, npix, nodata)?
+        }
+    };
 
     let (y_max_m, cell_y_m) = if geo.sy > 0.0 {
         (geo.y0, geo.sy)
@@ -493,6 +500,63 @@ fn first_band(path: &Path, data: DecodingResult, npix: usize, nodata: Option<f64
         DecodingResult::F32(v) => convert(&v, stride, |x| x == nd32, |x| x),
         DecodingResult::F64(v) => convert(&v, stride, |x| x == nd, |x| x as f32),
     })
+}
+
+/// The byte counts of the image's strips or tiles if one of them is 0 (a sparse file, GDAL's `SPARSE_OK=TRUE`: a
+/// block never written has offset 0 and 0 bytes), else `None`.
+fn empty_chunks(dec: &mut Decoder<BufReader<File>>, path: &Path) -> Result<Option<Vec<u64>>> {
+    let (tag, name) = match dec.get_chunk_type() {
+        tiff::decoder::ChunkType::Tile => (Tag::TileByteCounts, "TileByteCounts"),
+        tiff::decoder::ChunkType::Strip => (Tag::StripByteCounts, "StripByteCounts"),
+    };
+    let counts = match dec.find_tag(tag).map_err(|e| tiff_error(path, e))? {
+        Some(v) => v.into_u64_vec().map_err(|e| tag_error(path, name, e))?,
+        None => return Ok(None),
+    };
+    Ok(counts.contains(&0).then_some(counts))
+}
+
+/// Reads the first band of a sparse image (`ncols` × `nrows`) strip by strip or tile by tile, as GDAL does: a
+/// strip or tile of 0 bytes (`chunk_bytes`) is a missing block, filled with nodata (`NaN`), or with 0 when the
+/// file has no nodata value.
+fn read_sparse(
+    dec: &mut Decoder<BufReader<File>>,
+    path: &Path,
+    (ncols, nrows): (usize, usize),
+    nodata: Option<f64>,
+    chunk_bytes: &[u64],
+) -> Result<Vec<f32>> {
+    let npix = ncols * nrows;
+    if npix as u64 * 4 > MAX_DECODED_BYTES {
+        return Err(tiff_error(path, TiffError::LimitsExceeded));
+    }
+    let (chunk_w, chunk_h) = dec.chunk_dimensions();
+    let (chunk_w, chunk_h) = (chunk_w as usize, chunk_h as usize);
+    if chunk_w == 0 || chunk_h == 0 {
+        return Err(Error::format(
+            path.display().to_string(),
+            format!("the image's strips or tiles are {chunk_w} × {chunk_h} pixels"),
+            "re-save it with `gdal_translate in.tif out.tif`",
+        ));
+    }
+    let across = ncols.div_ceil(chunk_w);
+    let mut values = vec![if nodata.is_some() { f32::NAN } else { 0.0 }; npix];
+    // The first band's chunks come first, also in a planar (band by band) file.
+    for chunk in 0..across * nrows.div_ceil(chunk_h) {
+        if chunk_bytes.get(chunk).is_none_or(|&n| n == 0) {
+            continue;
+        }
+        let data = dec.read_chunk(chunk as u32).map_err(|e| tiff_error(path, e))?;
+        let (w, h) = dec.chunk_data_dimensions(chunk as u32);
+        let (w, h) = (w as usize, h as usize);
+        let band = first_band(path, data, w * h, nodata)?;
+        let (x0, y0) = ((chunk % across) * chunk_w, (chunk / across) * chunk_h);
+        let width = w.min(ncols - x0);
+        for r in 0..h.min(nrows - y0) {
+            values[(y0 + r) * ncols + x0..][..width].copy_from_slice(&band[r * w..][..width]);
+        }
+    }
+    Ok(values)
 }
 
 /// Reverses the row order of a row-major grid.

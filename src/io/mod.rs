@@ -21,6 +21,13 @@ pub mod stl;
 
 pub use atomic::{write_atomic, write_bytes_atomic, write_json_atomic};
 
+/// Creates the folder `dir` and its parents. An error names the folder, says that it could not be made and how to
+/// fix that ([`crate::Error::io`]'s hint for the operating system's error).
+pub fn create_folder(dir: &std::path::Path) -> crate::error::Result<()> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| crate::Error::io(dir, std::io::Error::new(e.kind(), format!("cannot create this folder: {e}"))))
+}
+
 /// A triangle mesh as read from a file, in the file's own frame and axes (no origin shift, no axis swap).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct MeshData {

@@ -306,7 +306,7 @@ fn io_err(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
 pub fn run_profile(scenario: &ProfileScenario, out_dir: &Path) -> Result<ProfileSummary> {
     let start_time = std::time::Instant::now();
     let rs = scenario.resolve()?;
-    std::fs::create_dir_all(out_dir).map_err(|e| Error::io(out_dir, e))?;
+    crate::io::create_folder(out_dir)?;
     let profile = rs.slope.profile();
     let layout = GaugeLayout::new(profile, scenario.envelope_spacing_m, scenario.collectors_x_m.clone());
     let mut gauges = GaugeEnsemble::new(layout.clone());

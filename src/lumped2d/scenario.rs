@@ -76,12 +76,41 @@ use std::path::{Path, PathBuf};
 
 /// Where the profile comes from.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case", deny_unknown_fields)]
+#[serde(rename_all = "snake_case", try_from = "RawProfileSource")]
 pub enum ProfileSource {
     /// A profile CSV (`x_m,z_m,material`), relative to the scenario file.
     Csv(PathBuf),
     /// A benched slope; its materials are `face` and `floor`.
     Bench(BenchGeometry),
+}
+
+/// The `[profile]` table as written: [`ProfileSource`] read through it, so that giving both keys or neither is
+/// told in words (serde's enum said "wanted exactly 1 element, more than 1 element").
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, expecting = "a table with `csv = \"profile.csv\"` or `[profile.bench]`")]
+struct RawProfileSource {
+    /// A profile CSV.
+    csv: Option<PathBuf>,
+    /// A benched slope.
+    bench: Option<BenchGeometry>,
+}
+
+impl TryFrom<RawProfileSource> for ProfileSource {
+    type Error = String;
+
+    fn try_from(raw: RawProfileSource) -> std::result::Result<ProfileSource, String> {
+        match (raw.csv, raw.bench) {
+            (Some(csv), None) => Ok(ProfileSource::Csv(csv)),
+            (None, Some(bench)) => Ok(ProfileSource::Bench(bench)),
+            (Some(_), Some(_)) => Err("[profile] gives both `csv` and `[profile.bench]`, which exclude each other: \
+                 keep `csv` to read the profile from that CSV file, or `[profile.bench]` to generate a benched \
+                 slope, and delete the other"
+                .to_string()),
+            (None, None) => Err("[profile] gives neither `csv` nor `[profile.bench]`: add `csv = \"profile.csv\"` \
+                 (a profile CSV) or a `[profile.bench]` table (a benched slope)"
+                .to_string()),
+        }
+    }
 }
 
 /// The `[release]` table: each value a number or `[min, max]`.
@@ -392,6 +421,25 @@ mod tests {
         let r = s.resolve().unwrap();
         assert_eq!(r.slope.profile().material_names(), &["face".to_string(), "floor".to_string()]);
         assert!(r.bench.is_some());
+    }
+
+    /// `csv` and `[profile.bench]` together, or neither, are told in words at the `[profile]` line (serde's enum
+    /// said "wanted exactly 1 element, more than 1 element"); each alone still reads.
+    #[test]
+    fn a_profile_with_both_sources_or_none_says_which_to_keep() {
+        let read = |text: &str| ProfileScenario::from_toml_str(text, "s.toml").map(|s| s.profile);
+        let e = read("materials = {}\n[profile]\ncsv = \"p.csv\"\n[profile.bench]\nn_benches = 2\n").unwrap_err();
+        let e = e.to_string();
+        assert!(e.starts_with("s.toml:2: ") && e.contains("exclude each other"), "{e}");
+        assert!(e.contains("keep `csv`") && !e.contains("element"), "{e}");
+        let e = read("materials = {}\n[profile]\n").unwrap_err().to_string();
+        assert!(e.contains("neither `csv` nor `[profile.bench]`"), "{e}");
+        let bench = read("materials = {}\n[profile.bench]\nn_benches = 2\n").unwrap();
+        assert_eq!(bench, ProfileSource::Bench(BenchGeometry { n_benches: 2, ..Default::default() }));
+        let s = ProfileScenario::from_toml_str("profile = { csv = \"p.csv\" }\nmaterials = {}\n", "s.toml").unwrap();
+        assert_eq!(s.profile, ProfileSource::Csv("p.csv".into()));
+        let e = ProfileScenario::from_toml_str("profile = 3\nmaterials = {}\n", "s.toml").unwrap_err().to_string();
+        assert!(e.contains("`csv = \"profile.csv\"` or `[profile.bench]`"), "{e}");
     }
 
     #[test]

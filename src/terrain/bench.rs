@@ -118,15 +118,50 @@ impl BenchGeometry {
     }
 
     /// Refuses a geometry whose 3D mesh would have more than [`MAX_MESH_TRIANGLES`] triangles, counted without
-    /// building it. The error names `max_edge_m`, or `n_benches` when even one triangle pair per segment is too many.
+    /// building it. The error names the value that, back at its default, lets the mesh fit (finer edges first, then
+    /// a wider mesh), else `n_benches`, and says how far that value may go with the others as given.
     fn check_mesh_size(&self, prefix: &str) -> Result<()> {
         let triangles = self.mesh_triangle_count(self.max_edge_m);
         if triangles <= MAX_MESH_TRIANGLES as f64 {
             return Ok(());
         }
-        let too_many_benches = self.mesh_triangle_count(f64::INFINITY) > MAX_MESH_TRIANGLES as f64;
+        let default = BenchGeometry::default();
+        let edges_at_default = BenchGeometry { max_edge_m: default.max_edge_m, ..self.clone() };
+        let width_at_default = BenchGeometry { lateral_width_m: default.lateral_width_m, ..self.clone() };
+        let most_benches = self.most_benches();
+        let edge_hint = |edge_m: f64| {
+            format!(
+                "give triangle edges of at least {} m (the default is {} m), a narrower lateral width or fewer \
+                 benches",
+                number_text(edge_m),
+                number_text(default.max_edge_m)
+            )
+        };
+        let (key, hint) = match (self.finest_edge_m(), self.widest_lateral_m()) {
+            (Some(edge_m), _) if self.max_edge_m < default.max_edge_m && edges_at_default.fits() => {
+                ("max_edge_m", edge_hint(edge_m))
+            }
+            (_, Some(width_m)) if self.lateral_width_m > default.lateral_width_m && width_at_default.fits() => (
+                "lateral_width_m",
+                format!(
+                    "give a lateral width of at most {} m (the default is {} m), longer triangle edges or fewer \
+                     benches",
+                    number_text(width_m),
+                    number_text(default.lateral_width_m)
+                ),
+            ),
+            _ if most_benches >= 1 => (
+                "n_benches",
+                format!(
+                    "give at most {most_benches} benches with these triangle edges and lateral width, or longer \
+                     triangle edges or a narrower lateral width for more"
+                ),
+            ),
+            (Some(edge_m), _) => ("max_edge_m", edge_hint(edge_m)),
+            (None, _) => ("n_benches", "give fewer benches".to_string()),
+        };
         Err(Error::invalid(
-            format!("{prefix}{}", if too_many_benches { "n_benches" } else { "max_edge_m" }),
+            format!("{prefix}{key}"),
             format!(
                 "{} benches over a {} m lateral width with {} m triangle edges make {} triangles, more than the \
                  limit of {MAX_MESH_TRIANGLES}",
@@ -135,12 +170,69 @@ impl BenchGeometry {
                 number_text(self.max_edge_m),
                 number_text(triangles)
             ),
-            if too_many_benches {
-                "give fewer benches".to_string()
-            } else {
-                "give longer triangle edges, a narrower lateral width or fewer benches".to_string()
-            },
+            hint,
         ))
+    }
+
+    /// True if the 3D mesh has at most [`MAX_MESH_TRIANGLES`] triangles.
+    fn fits(&self) -> bool {
+        self.mesh_triangle_count(self.max_edge_m) <= MAX_MESH_TRIANGLES as f64
+    }
+
+    /// The most benches whose mesh fits with the other values as they are (0 if not even 1 does).
+    fn most_benches(&self) -> usize {
+        let fits = |n: usize| BenchGeometry { n_benches: n, ..self.clone() }.fits();
+        let (mut lo, mut hi) = (0, self.n_benches); // fits(lo) or lo = 0; !fits(hi)
+        while hi - lo > 1 {
+            let mid = lo + (hi - lo) / 2;
+            if fits(mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        if lo == 0 || fits(lo) {
+            lo
+        } else {
+            0
+        }
+    }
+
+    /// The shortest triangle edge, to 3 significant digits, whose mesh fits with the other values as they are
+    /// (none if no edge up to [`MAX_LENGTH_M`] does). The count never grows with the edge.
+    fn finest_edge_m(&self) -> Option<f64> {
+        let fits = |edge_m: f64| BenchGeometry { max_edge_m: edge_m, ..self.clone() }.fits();
+        let (mut lo, mut hi) = (self.max_edge_m, MAX_LENGTH_M);
+        if !fits(hi) {
+            return None;
+        }
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if fits(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        let rounded = crate::error::round_up_3_digits(hi);
+        Some(if fits(rounded) { rounded } else { hi })
+    }
+
+    /// The widest lateral width, in whole millimetres, whose mesh fits with the other values as they are (none if
+    /// not even a millimetre does). The count never falls as the width grows.
+    fn widest_lateral_m(&self) -> Option<f64> {
+        let fits = |width_m: f64| BenchGeometry { lateral_width_m: width_m, ..self.clone() }.fits();
+        let (mut lo, mut hi) = (0.0, self.lateral_width_m);
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if fits(mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        let rounded = (lo * 1000.0).floor() / 1000.0;
+        (rounded > 0.0 && fits(rounded)).then_some(rounded)
     }
 
     /// Number of triangles of [`BenchGeometry::mesh`] with edges of at most `max_edge_m`, from the segment
@@ -342,5 +434,28 @@ mod tests {
         assert!(e.contains("geometry.max_edge_m") && e.contains("more than the limit"), "{e}");
         let many = BenchGeometry { n_benches: 100_000_000, ..Default::default() };
         assert!(many.validate("").unwrap_err().to_string().starts_with("n_benches"));
+    }
+
+    /// Too many triangles are blamed on the value that was changed, with the most it may be: more benches (it
+    /// blamed the default triangle edges), a wider mesh, or finer edges.
+    #[test]
+    fn a_mesh_too_large_names_the_value_changed_and_how_far_it_may_go() {
+        let many = BenchGeometry { n_benches: 100_000, ..Default::default() };
+        let e = many.validate("").unwrap_err().to_string();
+        let most = many.most_benches();
+        assert!(e.starts_with("n_benches:") && e.contains(&format!("give at most {most} benches")), "{e}");
+        assert!(BenchGeometry { n_benches: most, ..many.clone() }.fits());
+        assert!(!BenchGeometry { n_benches: most + 1, ..many }.fits());
+        let wide = BenchGeometry { lateral_width_m: 10_000.0, bench_height_m: 10_000.0, ..Default::default() };
+        let e = wide.validate("").unwrap_err().to_string();
+        assert!(e.starts_with("lateral_width_m:") && e.contains("a lateral width of at most"), "{e}");
+        let width = wide.widest_lateral_m().unwrap();
+        assert!(BenchGeometry { lateral_width_m: width, ..wide.clone() }.fits());
+        assert!(!BenchGeometry { lateral_width_m: width + 0.01, ..wide }.fits());
+        let fine = BenchGeometry { max_edge_m: 0.01, ..Default::default() };
+        let e = fine.validate("").unwrap_err().to_string();
+        let edge = fine.finest_edge_m().unwrap();
+        assert!(e.starts_with("max_edge_m:") && e.contains(&format!("edges of at least {}", number_text(edge))), "{e}");
+        assert!(BenchGeometry { max_edge_m: edge, ..fine }.fits());
     }
 }

@@ -47,6 +47,13 @@ pub fn is_terrain_file(path: &Path) -> bool {
 
 /// Reads a terrain file by its extension; DEMs are checked ([`super::dem_check`]) but not triangulated.
 fn read_terrain_part(path: &Path) -> Result<TerrainPart> {
+    if path.is_dir() {
+        return Err(Error::format(
+            path.display().to_string(),
+            "is a folder, not a terrain file",
+            "give a terrain file (.obj, .stl, .tif/.tiff or .asc), not the folder that holds it",
+        ));
+    }
     let ext = extension(path);
     match ext.as_str() {
         "obj" => Ok(TerrainPart::Mesh(crate::io::obj::read_obj(path)?)),
