@@ -169,18 +169,6 @@ pub fn propose_models(
             crate::run::check_run(msc, overrides)?;
         }
     }
-    propose_checked(models, overrides, out_dir, floor, stage, progress)
-}
-
-/// [`propose_models`] on models already checked (a floor's are the first model with other seeds).
-fn propose_checked(
-    models: &[(String, Scenario)],
-    overrides: &RunOverrides,
-    out_dir: &Path,
-    floor: bool,
-    stage: &dyn Fn(&str),
-    progress: &dyn Fn(usize, usize),
-) -> Result<BarrierStudy> {
     let sc = &models[0].1;
     let spec = &sc.file.barrier_design;
     let terrain = load_terrain(sc)?;
@@ -269,7 +257,7 @@ fn propose_checked(
         stage(&format!("the floor: model {} with seeds {seed} to {}", models[0].0, seed.wrapping_add(n as u64 - 1)));
         let o = RunOverrides { seed: None, ..overrides.clone() };
         let seeds = seed_floor(sc, seed, n);
-        Some(Box::new(propose_checked(&seeds, &o, &out_dir.join("floor"), false, stage, progress)?))
+        Some(Box::new(propose_models(&seeds, &o, &out_dir.join("floor"), false, stage, progress)?))
     } else {
         None
     };
