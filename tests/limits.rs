@@ -295,14 +295,17 @@ fn a_profile_release_far_past_a_rockfall_is_refused() {
     }
 }
 
-/// A stretch of 10⁻⁹ m asked for 10¹¹ stretches and aborted the run out of memory; an empty `within` scattered
-/// over the whole terrain.
+/// A stretch of 10⁻⁹ m asked for 10¹¹ stretches and aborted the run out of memory (so would a line 10⁶ m long at
+/// 0.5 m); an empty `within` scattered over the whole terrain.
 #[test]
 fn a_stretch_below_half_a_metre_and_an_empty_scatter_polygon_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let collector = "[[collectors]]\nline = [[40.0, 10.0], [40.0, 90.0]]\nsegment_m = 1e-9\n\n[simulation]";
     bench_scenario(dir.path(), "[simulation]", collector);
     refused(&["run", "scenario.toml", "--out", "out"], dir.path(), &["collectors[0].segment_m", "at least 0.5 m"]);
+    let collector = "[[collectors]]\nline = [[40.0, 10.0], [40.0, 1e6]]\nsegment_m = 5\n\n[simulation]";
+    bench_scenario(dir.path(), "[simulation]", collector);
+    refused(&["run", "scenario.toml", "--out", "out"], dir.path(), &["collectors[0].segment_m", "199998 stretches"]);
     let design = "[barrier_design]\nsegment_m = 1e-9\n\n[simulation]";
     bench_scenario(dir.path(), "[simulation]", design);
     refused(&["barrier", "scenario.toml", "--out", "out"], dir.path(), &["barrier_design.segment_m", "0.5 m"]);

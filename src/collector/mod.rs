@@ -45,6 +45,9 @@ pub const DEFAULT_SEGMENT_M: f64 = 5.0;
 /// stretches and exhausted memory).
 pub const MIN_SEGMENT_M: f64 = 0.5;
 
+/// The most stretches of one collector line (ours: 50 km at the smallest `segment_m`, past any pit or road line).
+pub const MAX_STRETCHES: usize = 100_000;
+
 fn default_segment_m() -> f64 {
     DEFAULT_SEGMENT_M
 }
@@ -269,6 +272,18 @@ pub fn scenario_collectors(specs: &[CollectorSpec], terrain: &Terrain) -> Result
                     field,
                     "another collector has this name",
                     "give every collector its own name (collectors.csv has one row per name)",
+                ));
+            }
+            if c.stretch_count() > MAX_STRETCHES {
+                return Err(Error::invalid(
+                    format!("collectors[{i}].segment_m"),
+                    format!(
+                        "cuts the {} m line '{}' into {} stretches, more than {MAX_STRETCHES}",
+                        crate::error::number_text(c.length_m()),
+                        c.name,
+                        c.stretch_count()
+                    ),
+                    "give a longer segment_m, or check the line's coordinates (the terrain's CRS)",
                 ));
             }
             if !terrain.surface.any_point_over(&c.line_m, 1.0) {
