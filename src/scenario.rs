@@ -301,10 +301,11 @@ fn default_density() -> f64 {
 /// gave infinite bounce heights).
 pub const MAX_ROCK_MASS_KG: f64 = 1e9;
 
-/// The smallest block mass a scenario or campaign may give, kg. Ours: with the 2 ms contact step, blocks of a few
-/// centimetres gain energy at impacts (on the bench stack a 0.03 kg flat box reached 257 kJ of the 38 J its drop
-/// holds; 0.1 to 3 kg blocks kept under their drop's energy in 1,000 rocks each); 1 kg is a block of about 7 cm,
-/// and rockfall hazard begins at about 10 cm.
+/// The smallest block mass a scenario or campaign may give, kg. Ours: 1 kg is a block of about 7 cm, where rockfall
+/// hazard begins (about 10 cm), and the engine's fixed lengths (2 mm of penetration left uncorrected, a 5 cm flight
+/// margin) stay small against it; 10⁻³⁰⁰ kg ended at NaN. (Blocks of a few centimetres also gained energy, a 0.03 kg
+/// flat box 257 kJ of the 38 J its drop on the bench stack holds, until the free rotation split the steps Newton's
+/// method does not converge on: [`crate::sim::body::free_rotation`].)
 pub const MIN_ROCK_MASS_KG: f64 = 1.0;
 
 /// The smallest side of a block given by its dimensions, m (ours, for the same reason as [`MIN_ROCK_MASS_KG`]).

@@ -38,16 +38,20 @@ impl RigidState {
     }
 }
 
-/// One implicit-midpoint step of Euler's torque-free equations in the body frame. Returns (Ω₁, Ω½).
-/// Solved by Newton's method on Ω½ (converges in a few iterations for any step where |Ω|Δt is below about 1).
-pub fn free_rotation_step(omega0: &Vector3<f64>, inertia: &Vector3<f64>, dt_s: f64) -> (Vector3<f64>, Vector3<f64>) {
+/// One implicit-midpoint step of Euler's torque-free equations in the body frame: (Ω₁, Ω½), or `None` where
+/// Newton's method on Ω½ does not converge (it does in a few iterations where |Ω|Δt is below a few radians; at
+/// 10 rad a flat box's rotational energy grew 1,000-fold in one step).
+fn midpoint_step(omega0: &Vector3<f64>, inertia: &Vector3<f64>, dt_s: f64) -> Option<(Vector3<f64>, Vector3<f64>)> {
     let th = Matrix3::from_diagonal(inertia);
+    let residual = |half: &Vector3<f64>| {
+        let l = inertia.component_mul(half);
+        (2.0 * inertia.component_mul(&(half - omega0)) + dt_s * half.cross(&l), l)
+    };
     let mut half = *omega0;
     for _ in 0..8 {
-        let l = inertia.component_mul(&half);
-        let f = 2.0 * inertia.component_mul(&(half - omega0)) + dt_s * half.cross(&l);
+        let (f, l) = residual(&half);
         if f.norm() <= 1e-15 * (1.0 + l.norm()) {
-            break;
+            return Some((2.0 * half - omega0, half));
         }
         let jac = 2.0 * th + dt_s * (half.cross_matrix() * th - l.cross_matrix());
         match solve3(&jac, &f) {
@@ -55,7 +59,42 @@ pub fn free_rotation_step(omega0: &Vector3<f64>, inertia: &Vector3<f64>, dt_s: f
             None => break,
         }
     }
-    (2.0 * half - omega0, half)
+    // Short of the tight tolerance after 8 iterations (rounding) but converged: kept, as always.
+    let (f, l) = residual(&half);
+    (f.norm() <= NEWTON_TOLERANCE * (1.0 + l.norm())).then(|| (2.0 * half - omega0, half))
+}
+
+/// The residual of the midpoint equation, relative to the angular momentum, below which a step that Newton's method
+/// left after 8 iterations is kept (ours: the energy it conserves is then exact to far below any rockfall figure).
+const NEWTON_TOLERANCE: f64 = 1e-9;
+
+/// The shortest step a free rotation is split into (ours): a spin that needs shorter steps is not finite.
+const MIN_SPLIT_S: f64 = 1e-9;
+
+/// The body-frame angular velocity after a torque-free rotation of `dt_s` from `omega0`: one implicit-midpoint step,
+/// or, where Newton's method does not converge on it, two half steps, and so on (ours).
+pub fn free_spin(omega0: &Vector3<f64>, inertia: &Vector3<f64>, dt_s: f64) -> Vector3<f64> {
+    free_rotation(None, omega0, inertia, dt_s).1
+}
+
+/// The orientation (from `q`, when given) and body-frame angular velocity after a torque-free rotation of `dt_s`
+/// from `omega0`: the implicit-midpoint step, the orientation moved by its midpoint velocity ([`rotate`]); where
+/// Newton's method does not converge on the step (|Ω|Δt of several radians: a block of a few centimetres spinning
+/// at a thousand rad/s through a flight step of 10 ms), two half steps, and so on (ours).
+pub fn free_rotation(
+    q: Option<&UnitQuaternion<f64>>,
+    omega0: &Vector3<f64>,
+    inertia: &Vector3<f64>,
+    dt_s: f64,
+) -> (Option<UnitQuaternion<f64>>, Vector3<f64>) {
+    match midpoint_step(omega0, inertia, dt_s) {
+        Some((w1, half)) => (q.map(|q| rotate(q, &half, dt_s)), w1),
+        None if dt_s < MIN_SPLIT_S || !omega0.iter().all(|w| w.is_finite()) => (q.copied(), *omega0),
+        None => {
+            let (q_mid, w_mid) = free_rotation(q, omega0, inertia, 0.5 * dt_s);
+            free_rotation(q_mid.as_ref(), &w_mid, inertia, 0.5 * dt_s)
+        }
+    }
 }
 
 /// `m⁻¹ b` by LU decomposition with partial pivoting, or `None` when `m` is singular: nalgebra's `m.lu().solve(&b)`
@@ -118,6 +157,27 @@ mod tests {
     use super::*;
     use crate::random::{standard_normal, stream, uniform};
 
+    /// A 3 cm flat box spinning at 1,000 rad/s through a 10 ms flight step (|Ω|Δt = 10 rad): Newton's method alone
+    /// left its rotational energy up to 1,355 times what it was (a 0.03 kg block then reached 257 kJ on the bench
+    /// stack); split into half steps it keeps its energy and the magnitude of its angular momentum.
+    #[test]
+    fn a_fast_spin_over_a_long_step_keeps_its_energy_and_momentum() {
+        let (m, [a, b, c]) = (0.03, [0.035, 0.026, 0.0125]);
+        let inertia = Vector3::new(b * b + c * c, a * a + c * c, a * a + b * b) * (m / 12.0);
+        let mut rng = stream(3, 0);
+        for _ in 0..200 {
+            let w = Vector3::from_fn(|_, _| standard_normal(&mut rng)).normalize() * 1000.0;
+            let q = UnitQuaternion::from_scaled_axis(Vector3::from_fn(|_, _| standard_normal(&mut rng)));
+            let (q1, w1) = free_rotation(Some(&q), &w, &inertia, 0.01);
+            let energy = |w: &Vector3<f64>| w.component_mul(&inertia).dot(w);
+            assert!((energy(&w1) / energy(&w) - 1.0).abs() < 1e-9, "{w} -> {w1}");
+            let momentum = |w: &Vector3<f64>| inertia.component_mul(w).norm();
+            assert!((momentum(&w1) / momentum(&w) - 1.0).abs() < 1e-9, "{w} -> {w1}");
+            assert!(q1.is_some());
+            assert_eq!(free_spin(&w, &inertia, 0.01), w1);
+        }
+    }
+
     #[test]
     fn solve3_gives_nalgebras_lu_solution_to_the_bit() {
         let mut rng = stream(7, 0);
@@ -152,9 +212,8 @@ mod tests {
         let mut q = UnitQuaternion::identity();
         let l0 = (q * inertia.component_mul(&w)).norm();
         for _ in 0..20000 {
-            let (w1, half) = free_rotation_step(&w, &inertia, 0.002);
-            q = rotate(&q, &half, 0.002);
-            w = w1;
+            let (q1, w1) = free_rotation(Some(&q), &w, &inertia, 0.002);
+            (q, w) = (q1.unwrap(), w1);
         }
         let e1 = w.component_mul(&inertia).dot(&w);
         assert!((e1 - e0).abs() < 1e-9 * e0, "{e0} {e1}");

@@ -18,7 +18,7 @@
 //! brake rocks in contact; all are off by default.
 
 use super::barrier::BarrierHit;
-use super::body::{free_rotation_step, rotate, RigidState};
+use super::body::{free_rotation, free_spin, rotate, RigidState};
 use super::contact::{solve, Contact, Scratch, SolverSettings, Velocities};
 use super::params::{CrDraw, SimParams};
 use crate::random::{uniform, Rng};
@@ -445,9 +445,13 @@ impl<'a> Run<'a> {
             // Rotation in sub-steps of at most 10 ms (ours): accurate phase for spins up to tens of rad/s.
             let sub = (dt / 0.01).ceil().max(1.0) as usize;
             for _ in 0..sub {
-                let (w1, half) =
-                    free_rotation_step(&self.s.omega_body_radps, &self.rock.inertia_kg_m2, dt / sub as f64);
-                self.s.orientation = rotate(&self.s.orientation, &half, dt / sub as f64);
+                let (q1, w1) = free_rotation(
+                    Some(&self.s.orientation),
+                    &self.s.omega_body_radps,
+                    &self.rock.inertia_kg_m2,
+                    dt / sub as f64,
+                );
+                self.s.orientation = q1.unwrap_or(self.s.orientation);
                 self.s.omega_body_radps = w1;
             }
             let from = self.s.position_m;
@@ -584,7 +588,7 @@ impl<'a> Run<'a> {
         let x_mid = self.s.position_m + self.s.velocity_mps * (0.5 * h);
         let q_mid = rotate(&self.s.orientation, &self.s.omega_body_radps, 0.5 * h);
         self.detect(&x_mid, &q_mid);
-        let (w_free, _) = free_rotation_step(&self.s.omega_body_radps, &rock.inertia_kg_m2, h);
+        let w_free = free_spin(&self.s.omega_body_radps, &rock.inertia_kg_m2, h);
         let free = Velocities { linear_mps: self.s.velocity_mps + GRAVITY * h, angular_body_radps: w_free };
         let mut after = free;
         let in_contact = !self.contacts.is_empty();
