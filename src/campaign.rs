@@ -396,7 +396,7 @@ fn read_blocks(path: &Path) -> Result<BTreeMap<String, Block>> {
                 row,
                 format!(
                     "block '{}' of {} kg and {:?} m is smaller than the smallest block talus takes ({MIN_ROCK_MASS_KG} \
-                     kg, {MIN_ROCK_SIZE_M} m a side: the 2 ms contact step does not resolve blocks of a few cm)",
+                     kg, {MIN_ROCK_SIZE_M} m a side: rockfall hazard begins at about 10 cm)",
                     block.block_id, block.mass_kg, block.size_m
                 ),
                 "give the block's mass in kg and its sizes in metres",
