@@ -456,21 +456,18 @@ pub fn assemble_terrain(
 /// ([`crate::terrain::surface::MAX_INDEX_BINS`]); `field` names the terrain in the error.
 pub fn check_spread(field: &str, vertices: &[Vector3<f64>], triangles: &[[u32; 3]]) -> Result<()> {
     use crate::terrain::surface::{index_bins, MAX_INDEX_BINS};
-    let bins = index_bins(vertices, triangles);
+    let (bins, width_m, height_m) = index_bins(vertices, triangles);
     if bins <= MAX_INDEX_BINS {
         return Ok(());
     }
-    let (lo, hi) = vertices
-        .iter()
-        .fold((Vector3::repeat(f64::INFINITY), -Vector3::repeat(f64::INFINITY)), |(l, h), v| (l.inf(v), h.sup(v)));
     Err(Error::invalid(
         field,
         format!(
             "the terrain's {} triangles lie far apart, over {:.3e} × {:.3e} m: indexing that would take {bins:.1e} \
              bins (at most {MAX_INDEX_BINS:.0e})",
             triangles.len(),
-            hi.x - lo.x,
-            hi.y - lo.y
+            width_m,
+            height_m
         ),
         "check that every terrain file is in the same CRS and that no file holds vertices far from the rest \
          (a vertex at 0, 0 in a georeferenced mesh, say)",

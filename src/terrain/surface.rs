@@ -39,22 +39,35 @@ struct TriPlane {
 /// The most bins a surface's grid index may take (ours: about 3 GB; a 4,000 × 4,000 DEM takes 64 million).
 pub const MAX_INDEX_BINS: f64 = 1e8;
 
-/// About how many bins [`Surface::new`] would index `triangles` with: their bounding box over bins of half the
-/// typical triangle leg. Far above the triangle count when the triangles lie far apart (files in different CRSs,
-/// a stray vertex far from the rest), which the index cannot hold.
-pub fn index_bins(vertices: &[Vector3<f64>], triangles: &[[u32; 3]]) -> f64 {
+/// About how many bins [`Surface::new`] would index `triangles` with, and the width and height of their bounding
+/// box, m: the box over bins of half the typical triangle leg. Far above the triangle count when the triangles lie
+/// far apart (files in different CRSs, a stray vertex far from the rest), which the index cannot hold.
+pub fn index_bins(vertices: &[Vector3<f64>], triangles: &[[u32; 3]]) -> (f64, f64, f64) {
+    let (lo, hi, area) = footprint(vertices, triangles);
+    let bin_m = bin_size_m(area, triangles.len());
+    let (width_m, height_m) = (hi.x - lo.x, hi.y - lo.y);
+    ((width_m / bin_m + 1.0) * (height_m / bin_m + 1.0), width_m, height_m)
+}
+
+/// The lowest and highest corners of the bounding box of `triangles` and their horizontal footprint area, m².
+fn footprint(vertices: &[Vector3<f64>], triangles: &[[u32; 3]]) -> (Vector3<f64>, Vector3<f64>, f64) {
     let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
     let mut area = 0.0;
     for t in triangles {
-        let [a, b, c] = t.map(|k| vertices[k as usize]);
-        for p in [a, b, c] {
-            lo = lo.inf(&p);
-            hi = hi.sup(&p);
+        for &k in t {
+            lo = lo.inf(&vertices[k as usize]);
+            hi = hi.sup(&vertices[k as usize]);
         }
+        let (a, b, c) = (vertices[t[0] as usize], vertices[t[1] as usize], vertices[t[2] as usize]);
         area += 0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)).abs();
     }
-    let bin_m = (0.5 * area / triangles.len() as f64).sqrt().max(1e-3);
-    ((hi.x - lo.x) / bin_m + 1.0) * ((hi.y - lo.y) / bin_m + 1.0)
+    (lo, hi, area)
+}
+
+/// The index's bin size for `triangles` with a footprint of `area_m2`: half the typical triangle leg (half a DEM
+/// cell), so that with exact overlap tests a bin holds one or two triangles.
+fn bin_size_m(area_m2: f64, triangles: usize) -> f64 {
+    (0.5 * area_m2 / triangles as f64).sqrt().max(1e-3)
 }
 
 /// A 2.5D triangulated surface with a grid index. Build it with [`Surface::new`].
@@ -157,22 +170,11 @@ impl Surface {
         if stats.triangles == stats.vertical {
             return None;
         }
-        let (mut lo, mut hi) = (Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY));
-        let mut area = 0.0;
-        for t in &tris {
-            for &k in t {
-                lo = lo.inf(&vertices[k as usize]);
-                hi = hi.sup(&vertices[k as usize]);
-            }
-            let (a, b, c) = (vertices[t[0] as usize], vertices[t[1] as usize], vertices[t[2] as usize]);
-            area += 0.5 * ((b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y)).abs();
-        }
-        // Bins of half the typical triangle leg (half a DEM cell): with exact overlap tests, one or two triangles
-        // per bin.
+        let (lo, hi, area) = footprint(&vertices, &tris);
         let (bin_m, nx, ny) = match like {
             Some(like) => (like.bin_m, like.nx, like.ny),
             None => {
-                let bin_m = (0.5 * area / (stats.triangles - stats.vertical) as f64).sqrt().max(1e-3);
+                let bin_m = bin_size_m(area, stats.triangles - stats.vertical);
                 let nx = (((hi.x - lo.x) / bin_m).floor() as usize + 1).min(1 << 15);
                 let ny = (((hi.y - lo.y) / bin_m).floor() as usize + 1).min(1 << 15);
                 (bin_m.max((hi.x - lo.x) / nx as f64).max((hi.y - lo.y) / ny as f64) * (1.0 + 1e-9), nx, ny)
