@@ -202,36 +202,19 @@ impl BenchGeometry {
     /// (none if no edge up to [`MAX_LENGTH_M`] does). The count never grows with the edge.
     fn finest_edge_m(&self) -> Option<f64> {
         let fits = |edge_m: f64| BenchGeometry { max_edge_m: edge_m, ..self.clone() }.fits();
-        let (mut lo, mut hi) = (self.max_edge_m, MAX_LENGTH_M);
-        if !fits(hi) {
+        if !fits(MAX_LENGTH_M) {
             return None;
         }
-        for _ in 0..100 {
-            let mid = 0.5 * (lo + hi);
-            if fits(mid) {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-        }
-        let rounded = crate::error::round_up_3_digits(hi);
-        Some(if fits(rounded) { rounded } else { hi })
+        let edge_m = last_fitting(MAX_LENGTH_M, self.max_edge_m, fits);
+        let rounded = crate::error::round_up_3_digits(edge_m);
+        Some(if fits(rounded) { rounded } else { edge_m })
     }
 
     /// The widest lateral width, in whole millimetres, whose mesh fits with the other values as they are (none if
     /// not even a millimetre does). The count never falls as the width grows.
     fn widest_lateral_m(&self) -> Option<f64> {
         let fits = |width_m: f64| BenchGeometry { lateral_width_m: width_m, ..self.clone() }.fits();
-        let (mut lo, mut hi) = (0.0, self.lateral_width_m);
-        for _ in 0..100 {
-            let mid = 0.5 * (lo + hi);
-            if fits(mid) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        let rounded = (lo * 1000.0).floor() / 1000.0;
+        let rounded = (last_fitting(0.0, self.lateral_width_m, fits) * 1000.0).floor() / 1000.0;
         (rounded > 0.0 && fits(rounded)).then_some(rounded)
     }
 
@@ -375,6 +358,20 @@ pub fn write_profile_csv(g: &BenchGeometry, path: &std::path::Path) -> Result<()
         }
         Ok(())
     })
+}
+
+/// The value nearest `bad` that still fits, between `good` (fits) and `bad` (does not), to the last bit: 100
+/// bisections.
+fn last_fitting(mut good: f64, mut bad: f64, fits: impl Fn(f64) -> bool) -> f64 {
+    for _ in 0..100 {
+        let mid = 0.5 * (good + bad);
+        if fits(mid) {
+            good = mid;
+        } else {
+            bad = mid;
+        }
+    }
+    good
 }
 
 #[cfg(test)]
