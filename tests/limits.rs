@@ -316,7 +316,7 @@ fn a_stretch_below_half_a_metre_and_an_empty_scatter_polygon_are_refused() {
 /// A 12,000 × 12,000 DEM aborted out of memory while it was triangulated; two terrain files 300 km apart (one in
 /// another CRS) asked for 10¹⁰ index bins.
 #[test]
-fn a_dem_too_large_to_triangulate_and_terrain_files_far_apart_are_refused() {
+fn a_dem_too_large_to_triangulate_and_terrain_triangles_far_apart_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     let scenario = |files: &str| {
         let text = format!(
@@ -354,4 +354,9 @@ fn a_dem_too_large_to_triangulate_and_terrain_files_far_apart_are_refused() {
     std::fs::write(dir.path().join("far.obj"), far).unwrap();
     scenario(&format!("\"{}\", \"far.obj\"", mesh.display().to_string().replace('\\', "/")));
     refused(&["run", "scenario.toml", "--out", "out"], dir.path(), &["terrain.files", "lie far apart", "same CRS"]);
+    // One file with a stray triangle 300 km away: `talus section` asked for 24 GB and more.
+    let stray = std::fs::read_to_string(&mesh).unwrap() + "v 3e5 3e5 0\nv 300010 3e5 0\nv 3e5 300010 0\nf -3 -2 -1\n";
+    std::fs::write(dir.path().join("stray.obj"), stray).unwrap();
+    let args = ["section", "stray.obj", "--line", "0,30,160,30", "--out", "s.csv"];
+    refused(&args, dir.path(), &["section.terrain", "lie far apart", "3.000e5 × 3.000e5 m"]);
 }

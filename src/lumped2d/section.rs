@@ -83,7 +83,8 @@ pub fn section_from_mesh(
     // A local origin keeps georeferenced coordinates well conditioned (as the terrain builder does).
     let (ox, oy) = points.iter().fold((f64::INFINITY, f64::INFINITY), |(a, b), p| (a.min(p.x), b.min(p.y)));
     let origin = if ox.is_finite() { Vector3::new(ox.floor(), oy.floor(), 0.0) } else { Vector3::zeros() };
-    let local = points.iter().map(|p| p - origin).collect();
+    let local: Vec<Vector3<f64>> = points.iter().map(|p| p - origin).collect();
+    crate::terrain::build::check_spread("section.terrain", &local, &mesh.triangles)?;
     let (surface, _, _) = Surface::new(local, &mesh.triangles).ok_or_else(|| {
         Error::invalid(
             "section.terrain",
