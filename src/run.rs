@@ -366,6 +366,7 @@ pub fn run_setup(
     let frame = RasterFrame::covering(&setup.terrain, &sc.file.output, &format!("{}: output", sc.path.display()))?;
     let earlier_outputs = earlier_run_outputs(out_dir);
     crate::io::create_folder(out_dir)?;
+    prepare_folder(out_dir)?;
     let n = setup.rock_count();
     let threads = overrides.threads.or(sc.file.simulation.threads).unwrap_or(0);
     let n_paths = overrides.paths.unwrap_or(sc.file.output.paths).min(n);
@@ -578,6 +579,40 @@ fn earlier_run_outputs(out_dir: &Path) -> Vec<String> {
     let Ok(json) = serde_json::from_str::<serde_json::Value>(&text) else { return Vec::new() };
     let names = json["outputs"].as_array().into_iter().flatten().filter_map(|v| v.as_str());
     names.filter(|n| Path::new(n).file_name().is_some_and(|f| f == *n)).map(String::from).collect()
+}
+
+/// Every name a run may write into its folder (those it wrote are listed in its `summary.json`).
+fn run_output_names() -> Vec<String> {
+    let stems = RASTERS.iter().chain(&crate::report::ZONE_RASTERS).map(|r| r.0);
+    let mut names: Vec<String> = stems.flat_map(|s| ["tif", "png", "asc", "prj"].map(|e| format!("{s}.{e}"))).collect();
+    names.extend(
+        ["endpoints.csv", "summary.json", "index.html", "terrain.png", "collectors.csv", "collectors.geojson"]
+            .into_iter()
+            .chain(["paths.csv", "paths.vtk", "paths.geojson"])
+            .map(String::from),
+    );
+    names
+}
+
+/// Before the rocks run: refuses a folder inside `out_dir` named like a file the run writes (found only when the
+/// run's last file was written, the others left), and removes the temporary files (`.NAME.tmp`) of a run into it
+/// that was killed before it renamed them.
+fn prepare_folder(out_dir: &Path) -> Result<()> {
+    for name in run_output_names() {
+        let path = out_dir.join(&name);
+        if path.is_dir() {
+            return Err(Error::invalid(
+                "--out",
+                format!("{} is a folder, where the run writes its file {name}", path.display()),
+                "remove or rename that folder, or give another --out",
+            ));
+        }
+        let tmp = crate::io::atomic::temp_path(&path);
+        if tmp.is_file() {
+            std::fs::remove_file(&tmp).map_err(|e| Error::io(&tmp, e))?;
+        }
+    }
+    Ok(())
 }
 
 /// Removes the files an earlier run into the same folder wrote (`earlier`) that this run did not (`now`), so that

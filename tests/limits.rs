@@ -202,6 +202,43 @@ fn out_as_a_folder_is_refused_and_no_temporary_file_is_left() {
     assert!(std::fs::read_dir(dir.path().join("folder")).unwrap().next().is_none());
 }
 
+/// A folder named like a file a run writes is refused before the rocks run (the run wrote every other file first);
+/// the temporary file a killed run left is removed by the next run into its folder.
+#[test]
+fn a_folder_in_the_way_of_a_run_output_is_refused_and_a_killed_runs_temporary_file_removed() {
+    let dir = tempfile::tempdir().unwrap();
+    bench_scenario(dir.path(), "[rocks]", "[rocks]");
+    let out = dir.path().join("out");
+    std::fs::create_dir_all(out.join("summary.json")).unwrap();
+    let run = ["run", "scenario.toml", "--rocks", "20", "--out", "out"];
+    refused(&run, dir.path(), &["--out", "summary.json is a folder", "rename"]);
+    assert_eq!(listing(&out), vec!["summary.json".to_string()]);
+    std::fs::remove_dir(out.join("summary.json")).unwrap();
+    std::fs::write(out.join(".endpoints.csv.tmp"), "rock_id,source_id\n0,a\n").unwrap();
+    let o = talus(&run, dir.path());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let names = listing(&out);
+    assert!(names.contains(&"summary.json".to_string()) && names.iter().all(|n| !n.ends_with(".tmp")), "{names:?}");
+}
+
+/// A barrier study whose source lies off the terrain leaves no output folder behind (it left an empty one).
+#[test]
+fn a_barrier_study_refused_at_its_sources_leaves_no_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(shipped("examples/bench_stack_barrier.toml")).unwrap();
+    let mesh = shipped("meshes/bench_stack/bench_stack.obj").display().to_string().replace('\\', "/");
+    let polygon = "[[10.0, 35.0], [21.6, 35.0], [21.6, 65.0], [10.0, 65.0]]";
+    assert!(text.contains(polygon));
+    let off = "[[1000.0, 35.0], [1021.6, 35.0], [1021.6, 65.0], [1000.0, 65.0]]";
+    let text = text.replace("../meshes/bench_stack/bench_stack.obj", &mesh).replace(polygon, off);
+    std::fs::write(dir.path().join("scenario.toml"), text).unwrap();
+    refused(
+        &["barrier", "scenario.toml", "--out", "out"],
+        dir.path(),
+        &["sources[0]", "`within` overlaps the terrain"],
+    );
+}
+
 #[test]
 fn a_failed_rename_removes_the_temporary_file() {
     let dir = tempfile::tempdir().unwrap();

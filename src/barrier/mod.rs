@@ -191,7 +191,6 @@ pub fn propose_models(
     let cand_cols: Vec<Collector> =
         candidates.iter().map(|c| Collector::new(c.name.clone(), c.line_m.clone(), spec.segment_m)).collect();
     let offset = crate::collector::scenario_collectors(&sc.file.collectors, &terrain)?.len();
-    crate::io::create_folder(out_dir)?;
     let n = models.len();
     let of_model = |name: &str| if n == 1 { String::new() } else { format!(" (model {name})") };
 
