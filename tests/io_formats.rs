@@ -105,6 +105,22 @@ fn geotiff_round_trip() {
     let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(names, vec!["dem.tif"]);
 
+    // Damaged image data (the Deflate stream) is called damaged, not a disk or permission problem.
+    let mut dec = tiff::decoder::Decoder::new(std::fs::File::open(&path).unwrap()).unwrap();
+    let data = dec.get_tag_u64_vec(tiff::tags::Tag::StripOffsets).unwrap()[0] as usize;
+    let mut bytes = std::fs::read(&path).unwrap();
+    for b in &mut bytes[data..data + 16] {
+        *b ^= 0x5a;
+    }
+    let bad = p(dir.path(), "damaged.tif");
+    std::fs::write(&bad, bytes).unwrap();
+    let err = geotiff::read_grid(&bad).unwrap_err().to_string();
+    assert!(
+        err.contains("damaged.tif") && err.contains("cannot be decoded") && err.contains("export it again"),
+        "{err}"
+    );
+    std::fs::remove_file(&bad).unwrap();
+
     // Passing the read CRS through again gives the same keys.
     let path2 = p(dir.path(), "again.tif");
     geotiff::write_grid(&path2, &back).unwrap();

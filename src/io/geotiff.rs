@@ -29,6 +29,7 @@ use crate::io::write_atomic;
 use crate::raster::{Crs, GeoKeys, Grid};
 use std::fs::File;
 use std::io::BufReader;
+use std::io::ErrorKind;
 use std::path::Path;
 use tiff::decoder::{Decoder, DecodingResult, Limits};
 use tiff::encoder::{colortype, Compression, DeflateLevel, TiffEncoder};
@@ -602,6 +603,17 @@ fn tag_error(path: &Path, tag: &str, e: TiffError) -> Error {
 
 fn tiff_error(path: &Path, e: TiffError) -> Error {
     match e {
+        // The decompressor reports damaged image data as an I/O error: not the disk's or the path's fault.
+        TiffError::IoError(source)
+            if matches!(source.kind(), ErrorKind::InvalidData | ErrorKind::InvalidInput | ErrorKind::Other) =>
+        {
+            Error::format(
+                path.display().to_string(),
+                format!("the image data cannot be decoded ({source}): the file is damaged"),
+                "copy or export it again; if `gdalinfo -checksum FILE` reads it, re-save it with \
+                 `gdal_translate in.tif out.tif`",
+            )
+        }
         TiffError::IoError(source) => Error::io(path, source),
         TiffError::LimitsExceeded => Error::format(
             path.display().to_string(),
