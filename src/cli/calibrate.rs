@@ -72,7 +72,8 @@ pub fn run(a: CalibrateArgs) -> anyhow::Result<()> {
     let kind = ModelKind::parse(&a.model)?;
     let (mut cfg, source) = match &a.config {
         Some(p) => (CalibrationConfig::read(p)?, p.display().to_string()),
-        None => (CalibrationConfig::default(), "settings".to_string()),
+        // A default value in the way of a flag's is named as a default, changed in a settings file.
+        None => (CalibrationConfig::default(), "the default settings (change them with --config FILE)".to_string()),
     };
     if let Some(s) = a.seed {
         cfg.seed = s;
