@@ -450,6 +450,35 @@ fn with_rolling_resistance_a_rolling_ball_slows_as_azzoni_says() {
     assert_relative_eq!(braking, a_share * mu_r * GRAVITY_MPS2 * th.cos(), max_relative = 0.1);
 }
 
+#[test]
+fn with_rolling_resistance_rocks_dropped_onto_a_slope_they_rest_on_stop() {
+    // 25° under a static angle of 35°: a block dropped 10 cm comes to rest (a lens landing on its rim may roll
+    // away); none runs to the time limit. With the resistance applied after the contact solve, a resting rock
+    // lifted off every few dozen steps and never counted as stopped: 12 of 100 such drops ran to the time limit at
+    // μ_r = 1 (4 at 0.3).
+    let slope_deg = 25.0f64;
+    let terrain = incline(slope_deg, material(0.3, 35.0, 30.0));
+    let th = slope_deg.to_radians();
+    let mut stopped = 0;
+    for (i, kind) in [ShapeKind::Cube, ShapeKind::FlatBox, ShapeKind::Smartie].into_iter().cycle().take(60).enumerate()
+    {
+        let r = rock(kind, 10.0 + 30.0 * i as f64);
+        let mut rng = stream(3, i as u64);
+        let u = [0; 3].map(|_| talus::random::uniform(&mut rng));
+        let q = UnitQuaternion::from_euler_angles(u[0] * 6.3, u[1] * 6.3, u[2] * 6.3);
+        let x = 100.0;
+        let start = at_rest(Vector3::new(x, 100.0, (200.0 - x) * th.tan() + r.bounding_radius_m / th.cos() + 0.1), q);
+        for mu_r in [0.3, 1.0] {
+            let effects = talus::sim::Effects { rolling_resistance: Some(mu_r), ..Default::default() };
+            let params = SimParams { max_time_s: 30.0, effects, ..Default::default() };
+            let out = simulate(&terrain, &r, start, &params, &mut stream(1, i as u64), &mut ());
+            assert_ne!(out.stop_reason, StopReason::MaxTime, "rock {i} ({}) at μ_r = {mu_r}: {out:?}", r.shape);
+            stopped += usize::from(out.stop_reason == StopReason::Stopped);
+        }
+    }
+    assert!(stopped >= 100, "{stopped} of 120 stopped");
+}
+
 /// A ball: the convex hull of 600 points spread evenly over a sphere (a Fibonacci lattice).
 fn ball(mass_kg: f64) -> RockBody {
     let points: Vec<[f64; 3]> = (0..600)

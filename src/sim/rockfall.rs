@@ -589,9 +589,17 @@ impl<'a> Run<'a> {
         let q_mid = rotate(&self.s.orientation, &self.s.omega_body_radps, 0.5 * h);
         self.detect(&x_mid, &q_mid);
         let w_free = free_spin(&self.s.omega_body_radps, &rock.inertia_kg_m2, h);
-        let free = Velocities { linear_mps: self.s.velocity_mps + GRAVITY * h, angular_body_radps: w_free };
-        let mut after = free;
+        let mut free = Velocities { linear_mps: self.s.velocity_mps + GRAVITY * h, angular_body_radps: w_free };
         let in_contact = !self.contacts.is_empty();
+        if in_contact && self.params.effects.rolling_resistance.is_some() {
+            // Rolling resistance in contact acts on what the solver starts from, so that the contacts it solves
+            // hold: applied after the solve (as the drags are), it took the spin and the speed along the ground
+            // but not the normal speed that went with them, and a rock at rest on a slope lifted off every few
+            // dozen steps and never counted as stopped.
+            self.brake_at.0 = self.contacts.iter().fold(Vector3::zeros(), |a, c| a + c.normal).normalize();
+            self.roll(&mut free, h);
+        }
+        let mut after = free;
         if in_contact {
             self.out.contact_steps += 1;
             // Warm start: a contact that persists from the previous step (same vertex, same triangle) starts from its
@@ -635,23 +643,21 @@ impl<'a> Run<'a> {
             self.vertex_cr[c.vertex] = c.cr_drawn;
         }
         if in_contact {
-            // The averaged normal only rolling resistance uses.
-            let normal = match self.params.effects.rolling_resistance {
-                Some(_) => self.contacts.iter().fold(Vector3::zeros(), |a, c| a + c.normal).normalize(),
-                None => Vector3::z(),
-            };
             let drag = self
                 .contacts
                 .iter()
                 .map(|k| self.drag_per_s[self.terrain.triangle_material[k.triangle as usize] as usize])
                 .fold(0.0, f64::max);
-            self.brake_at = (normal, drag);
+            self.brake_at.1 = drag;
             self.brake_left_s = self.params.contact_duration_s;
         }
         // Acting for the rest of the contact's duration only (all of `h` but in the step that ends it).
         let braking = self.brake_left_s > 1e-12;
         if braking {
             let d = h.min(self.brake_left_s);
+            if !in_contact {
+                self.roll(&mut after, d);
+            }
             self.brake(&mut after, d);
             self.brake_left_s -= d;
         }
@@ -688,13 +694,11 @@ impl<'a> Run<'a> {
         }
     }
 
-    /// Rolling resistance (when on) and drag (the largest soft-ground rate among the touched materials plus the
-    /// vegetation drag, then the scarring drag) on a rock in contact over a step of `h`, with the normal and the
-    /// soft-ground rate of its last touch.
-    fn brake(&self, vel: &mut Velocities, h: f64) {
-        let effects = &self.params.effects;
-        let (n, soft_drag_per_s) = self.brake_at;
-        if let Some(mu_r) = effects.rolling_resistance {
+    /// Rolling resistance (when on) over `h` on a rock in contact, against the averaged normal of its last touch:
+    /// in a step in contact on the velocities the solver starts from, after the last touch on the step's result.
+    fn roll(&self, vel: &mut Velocities, h: f64) {
+        let n = self.brake_at.0;
+        if let Some(mu_r) = self.params.effects.rolling_resistance {
             let v = vel.linear_mps;
             let along = v - n * v.dot(&n);
             let speed = along.norm();
@@ -713,7 +717,12 @@ impl<'a> Run<'a> {
                 vel.angular_body_radps *= f;
             }
         }
-        let c = soft_drag_per_s + self.vegetation_drag_per_s;
+    }
+
+    /// Drag (the largest soft-ground rate among the touched materials plus the vegetation drag, then the scarring
+    /// drag) on a rock in contact over a step of `h`, with the soft-ground rate of its last touch.
+    fn brake(&self, vel: &mut Velocities, h: f64) {
+        let c = self.brake_at.1 + self.vegetation_drag_per_s;
         if c > 0.0 {
             let f = (-c * h).exp();
             vel.linear_mps *= f;
