@@ -115,7 +115,8 @@ impl Setup {
                 }
             }
         };
-        let start = self.sources.release(source, &self.terrain, &body, &mut rng);
+        let clear_edges = self.params.terrain_edge_contacts;
+        let start = self.sources.release(source, &self.terrain, &body, &mut rng, clear_edges);
         (RockDraw { index, source, body, start }, rng)
     }
 

@@ -241,11 +241,19 @@ impl Sources {
         self.sources.len() - 1
     }
 
-    /// Draws the release state of `rock` from source `s`.
-    pub fn release(&self, s: usize, terrain: &Terrain, rock: &RockBody, rng: &mut Rng) -> RigidState {
+    /// Draws the release state of `rock` from source `s`; with `clear_edges`, clear of the terrain's edges too
+    /// ([`place_above_ground`]).
+    pub fn release(
+        &self,
+        s: usize,
+        terrain: &Terrain,
+        rock: &RockBody,
+        rng: &mut Rng,
+        clear_edges: bool,
+    ) -> RigidState {
         let src = &self.sources[s];
         if let Some((p, v, w)) = src.release {
-            return measured_release(terrain, rock, p, v, w, rng);
+            return measured_release(terrain, rock, p, v, w, rng, clear_edges);
         }
         let [x, y] = src.sample_xy(terrain, rng);
         let orientation = random_orientation(rng);
@@ -257,7 +265,7 @@ impl Sources {
             orientation,
             omega_body_radps: Vector3::zeros(),
         };
-        place_above_ground(terrain, rock, &mut state, src.spec.height_m);
+        place_above_ground(terrain, rock, &mut state, src.spec.height_m, clear_edges);
         if let Some(v) = src.spec.velocity_mps {
             state.velocity_mps = Vector3::new(v[0], v[1], v[2]);
         } else if let Some([lo, hi]) = src.spec.speed_mps {
@@ -355,8 +363,9 @@ pub fn downslope(n: &Vector3<f64>) -> Vector3<f64> {
 }
 
 /// Lifts a rock so that its lowest vertex is `gap_m` above the ground under it (vertically), checking every
-/// vertex against the ground under that vertex.
-pub fn place_above_ground(terrain: &Terrain, rock: &RockBody, state: &mut RigidState, gap_m: f64) {
+/// vertex against the ground under that vertex; with `clear_edges` (the engine's `terrain_edge_contacts`), also
+/// so that every terrain edge under the rock lies `gap_m` below its underside (a ridge between its vertices).
+pub fn place_above_ground(terrain: &Terrain, rock: &RockBody, state: &mut RigidState, gap_m: f64, clear_edges: bool) {
     let rot = state.orientation.to_rotation_matrix();
     let mut lift = f64::NEG_INFINITY;
     let c = state.position_m;
@@ -366,7 +375,52 @@ pub fn place_above_ground(terrain: &Terrain, rock: &RockBody, state: &mut RigidS
             terrain.surface.height(c.x + p.x, c.y + p.y).or_else(|| terrain.surface.height(c.x, c.y)).unwrap_or(c.z);
         lift = lift.max(ground + gap_m - p.z);
     }
+    if clear_edges {
+        lift = lift.max(clear_of_edges(terrain, rock, &rot, &c) + gap_m);
+    }
     state.position_m.z = lift;
+}
+
+/// The lowest height of the centre at (c.x, c.y) that leaves every terrain edge under the rock (oriented `rot`) at
+/// or below its underside, the edges sampled every twentieth of the rock's bounding radius (ours).
+fn clear_of_edges(terrain: &Terrain, rock: &RockBody, rot: &nalgebra::Rotation3<f64>, c: &Vector3<f64>) -> f64 {
+    let r = rock.bounding_radius_m;
+    let mut edges = Vec::new();
+    terrain.surface.edges_in(c.x - r, c.x + r, c.y - r, c.y + r, &mut edges);
+    let vertices = terrain.surface.vertices();
+    let up = rot.inverse_transform_vector(&Vector3::z());
+    let mut lift = f64::NEG_INFINITY;
+    for (ia, ib, _) in edges {
+        let (a, b) = (vertices[ia as usize], vertices[ib as usize]);
+        let n = ((b - a).xy().norm() / (0.05 * r)).ceil().max(1.0) as usize;
+        for k in 0..=n {
+            let p = a + (b - a) * (k as f64 / n as f64);
+            let offset = rot.inverse_transform_vector(&Vector3::new(p.x - c.x, p.y - c.y, 0.0));
+            if let Some(under) = underside(&rock.faces, &offset, &up) {
+                lift = lift.max(p.z - under);
+            }
+        }
+    }
+    lift
+}
+
+/// The lowest t at which the line `b0 + t·e` (body frame) lies inside the hull of outward face planes `faces`
+/// (n·x ≤ d inside), or `None` if the line misses the hull.
+fn underside(faces: &[(Vector3<f64>, f64)], b0: &Vector3<f64>, e: &Vector3<f64>) -> Option<f64> {
+    let (mut lo, mut hi) = (f64::NEG_INFINITY, f64::INFINITY);
+    for (n, d) in faces {
+        let (along, room) = (n.dot(e), d - n.dot(b0));
+        if along.abs() < 1e-12 {
+            if room < 0.0 {
+                return None;
+            }
+        } else if along > 0.0 {
+            hi = hi.min(room / along);
+        } else {
+            lo = lo.max(room / along);
+        }
+    }
+    (lo <= hi).then_some(lo)
 }
 
 /// A measured release (position, velocity and spin in the terrain's internal frame): the centre of mass where it
@@ -378,6 +432,7 @@ pub fn measured_release(
     velocity_mps: Vector3<f64>,
     spin_radps: Vector3<f64>,
     rng: &mut Rng,
+    clear_edges: bool,
 ) -> RigidState {
     let orientation = random_orientation(rng);
     let mut state = RigidState {
@@ -387,7 +442,7 @@ pub fn measured_release(
         omega_body_radps: orientation.inverse_transform_vector(&spin_radps),
     };
     let mut lifted = state;
-    place_above_ground(terrain, rock, &mut lifted, 0.0);
+    place_above_ground(terrain, rock, &mut lifted, 0.0, clear_edges);
     state.position_m.z = state.position_m.z.max(lifted.position_m.z);
     state
 }

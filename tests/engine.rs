@@ -479,6 +479,45 @@ fn with_rolling_resistance_rocks_dropped_onto_a_slope_they_rest_on_stop() {
     assert!(stopped >= 100, "{stopped} of 120 stopped");
 }
 
+#[test]
+fn with_terrain_edge_contacts_blocks_dropped_on_a_knife_ridge_stay_on_top_of_it() {
+    // A ridge of 60° flanks whose crest has a vertex every 10 m, under blocks of about 1 t (0.7–1.3 m): between its
+    // vertices the crest passes through a face unseen by the hull vertices, and blocks came to rest with it deep
+    // inside them. With `terrain_edge_contacts`, no block's centre goes below the ground, and no block gains
+    // mechanical energy.
+    let (crest_m, tan) = (30.0, 60f64.to_radians().tan());
+    let ground = move |x: f64| crest_m - (x - 20.0).abs() * tan;
+    let terrain = Terrain::from_function(40.0, 4, material(0.3, 35.0, 30.0), move |x, _| ground(x)).unwrap();
+    let deepest = |edges: bool| {
+        let params = SimParams { max_time_s: 5.0, terrain_edge_contacts: edges, ..Default::default() };
+        let mut deepest = 0.0f64;
+        for (i, kind) in
+            [ShapeKind::Cube, ShapeKind::FlatBox, ShapeKind::Smartie].into_iter().cycle().take(30).enumerate()
+        {
+            let r = rock(kind, 1000.0);
+            let mut rng = stream(5, i as u64);
+            let u = [0; 3].map(|_| talus::random::uniform(&mut rng));
+            let q = UnitQuaternion::from_euler_angles(u[0] * 6.3, u[1] * 6.3, u[2] * 6.3);
+            let mut start = at_rest(Vector3::new(20.0 + 0.2 * u[0], 15.0 + 10.0 * u[1], 0.0), q);
+            talus::source::place_above_ground(&terrain, &r, &mut start, 0.3, edges);
+            let mut rec = Record::default();
+            simulate(&terrain, &r, start, &params, &mut stream(1, i as u64), &mut rec);
+            let energy = |s: &Sample| s.kinetic_j + r.mass_kg * GRAVITY_MPS2 * s.position_m.z;
+            let e0 = energy(&rec.samples[0]);
+            for s in &rec.samples {
+                if (2.0..38.0).contains(&s.position_m.x) {
+                    deepest = deepest.max(ground(s.position_m.x) - s.position_m.z);
+                }
+                assert!(energy(s) <= e0 + 1e-6 * e0.abs() + 1.0, "block {i} gained energy at {} s", s.t_s);
+            }
+        }
+        deepest
+    };
+    // 1 cm: the engine leaves penetrations of up to `penetration_slop_m` (2 mm) uncorrected.
+    assert!(deepest(true) < 0.01, "a centre went {} m below the ground", deepest(true));
+    assert!(deepest(false) > 0.3, "the hull vertices alone kept the crest out: {} m", deepest(false));
+}
+
 /// A ball: the convex hull of 600 points spread evenly over a sphere (a Fibonacci lattice).
 fn ball(mass_kg: f64) -> RockBody {
     let points: Vec<[f64; 3]> = (0..600)

@@ -455,7 +455,7 @@ impl Rigid3dCtx {
             orientation,
             omega_body_radps: Vector3::zeros(),
         };
-        place_above_ground(terrain, body, &mut state, start.clearance_m);
+        place_above_ground(terrain, body, &mut state, start.clearance_m, self.params.terrain_edge_contacts);
         let out = simulate(terrain, body, state, &self.params, &mut rng, &mut ());
         let p = out.final_state.position_m;
         let class = classify(g, p.x, out.stop_reason == Stop3d::LeftTerrain);

@@ -619,7 +619,7 @@ impl Prepared3d<'_> {
         let mut rng = stream(seed, super::model::stream_index(run.index, repeat));
         let p = to_local(&model.terrain, run.release_m);
         let (v, w) = (run.velocity_mps.into(), run.spin_radps.into());
-        let start = measured_release(terrain, body, p, v, w, &mut rng);
+        let start = measured_release(terrain, body, p, v, w, &mut rng, self.sim.terrain_edge_contacts);
         let meter =
             self.model.reading.rebounds.then(|| rebound_meter(self.model.reading.track_noise_m, run, repeat, seed));
         let mut obs = PathObserver3d::new(terrain, meter);

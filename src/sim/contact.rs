@@ -24,10 +24,15 @@ use nalgebra::{Matrix2, UnitQuaternion, Vector2, Vector3};
 /// One vertex–ground contact at the step's midpoint configuration.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Contact {
-    /// Index of the rock's hull vertex.
+    /// Index of the rock's hull vertex; for a terrain edge inside the rock ([`SimParams::terrain_edge_contacts`]),
+    /// the hull's vertex count plus the edge's lower terrain vertex index.
+    ///
+    /// [`SimParams::terrain_edge_contacts`]: super::SimParams::terrain_edge_contacts
     pub vertex: usize,
-    /// World position of the vertex, m.
+    /// World position of the contact point (the vertex, or the deepest point of the terrain edge), m.
     pub point_m: Vector3<f64>,
+    /// The contact point in the body frame (the hull vertex itself for a vertex contact), m.
+    pub arm_body_m: Vector3<f64>,
     /// Upward unit normal of the ground.
     pub normal: Vector3<f64>,
     /// Penetration depth along the normal, m (≥ 0).
@@ -137,7 +142,7 @@ pub fn solve(
         let n = c.normal;
         let t1 = any_perpendicular(&n);
         let t2 = n.cross(&t1);
-        let b = rock.vertices_m[c.vertex];
+        let b = c.arm_body_m;
         let to_body = |d: &Vector3<f64>| q.inverse_transform_vector(d);
         let (jn, jt1, jt2) = (b.cross(&to_body(&n)), b.cross(&to_body(&t1)), b.cross(&to_body(&t2)));
         let (mn, mt1, mt2) = (jn.component_mul(&inv_i), jt1.component_mul(&inv_i), jt2.component_mul(&inv_i));

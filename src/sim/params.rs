@@ -88,6 +88,14 @@ pub struct SimParams {
     /// Horizontal spacing of the path samples that feed rasters and collectors, m (default: 0.5; at least
     /// [`MIN_SAMPLE_SPACING_M`]).
     pub sample_spacing_m: f64,
+    /// Also take terrain edges that pass through the rock as contacts (default: false; ours). Only the rock's hull
+    /// vertices are tested against the ground otherwise (physics.md §8, as RAMMS), so a ridge, a crest or a spike
+    /// narrower than the spacing of a rock's vertices passes through a face unseen (1 t blocks dropped on a ridge
+    /// with 60° flanks came to rest with the crest up to 0.9 m inside them). With this on, each terrain edge near
+    /// the rock is clipped to the hull; where its deepest point lies more than `penetration_slop_m` inside, that
+    /// point is a contact with the normal of the nearest hull face, pointing into the rock. Off by default until
+    /// the studies have been run again with it: it changes results wherever the ground is convex under a rock.
+    pub terrain_edge_contacts: bool,
     /// Optional effects (default: none).
     pub effects: Effects,
 }
@@ -109,6 +117,7 @@ impl Default for SimParams {
             solver_tolerance_mps: MAX_SOLVER_TOLERANCE_MPS,
             cr_draw: CrDraw::PerRock,
             sample_spacing_m: 0.5,
+            terrain_edge_contacts: false,
             effects: Effects::default(),
         }
     }

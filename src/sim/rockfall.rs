@@ -248,6 +248,8 @@ struct Run<'a> {
     contacts: Vec<Contact>,
     previous: Vec<Contact>,
     scratch: Scratch,
+    /// The terrain edges near the rock ([`SimParams::terrain_edge_contacts`]), reused between steps.
+    edges: Vec<(u32, u32, u32)>,
     last_sample: Option<(Vector3<f64>, f64)>,
     out: Outcome,
     settings: SolverSettings,
@@ -339,6 +341,7 @@ impl<'a> Run<'a> {
             contacts: Vec::with_capacity(16),
             previous: Vec::with_capacity(16),
             scratch: Scratch::default(),
+            edges: Vec::new(),
             last_sample: None,
             out,
             settings,
@@ -637,7 +640,9 @@ impl<'a> Run<'a> {
                 });
             }
         }
-        for c in &self.contacts {
+        // Hull vertices only (a terrain edge's contact has an index past them).
+        let hull_vertices = self.touch_left.len();
+        for c in self.contacts.iter().filter(|c| c.vertex < hull_vertices) {
             // One more than the contact's steps: `contact_step` takes one off at the end of the step.
             self.touch_left[c.vertex] = self.touch_steps + 1;
             self.vertex_cr[c.vertex] = c.cr_drawn;
@@ -781,6 +786,7 @@ impl<'a> Run<'a> {
             self.contacts.push(Contact {
                 vertex: i,
                 point_m: p,
+                arm_body_m: *b,
                 normal,
                 depth_m: depth,
                 warm: (0.0, [0.0; 2]),
@@ -791,17 +797,68 @@ impl<'a> Run<'a> {
                 mu_dynamic,
             });
         }
+        if self.params.terrain_edge_contacts {
+            self.detect_edges(x, &rot);
+        }
+    }
+
+    /// Adds the terrain edges that pass through the rock at the pose (x, rot) more than `penetration_slop_m` deep
+    /// as contacts ([`SimParams::terrain_edge_contacts`]): at the edge's deepest point, with the normal of the
+    /// hull face nearest to it, pointing into the rock; the restitution is the rock's draw for the edge's material
+    /// (no roughness tilt; not counted as an impact). Edges meeting at a buried terrain vertex give it once.
+    fn detect_edges(&mut self, x: &Vector3<f64>, rot: &nalgebra::Rotation3<f64>) {
+        let rock = self.rock;
+        let r = rock.bounding_radius_m;
+        let mut edges = std::mem::take(&mut self.edges);
+        self.terrain.surface.edges_in(x.x - r, x.x + r, x.y - r, x.y + r, &mut edges);
+        let vertices = self.terrain.surface.vertices();
+        let first_edge_contact = self.contacts.len();
+        let effects = &self.params.effects;
+        let (v, w) = (self.s.velocity_mps, self.s.orientation * self.s.omega_body_radps);
+        for &(ia, ib, triangle) in &edges {
+            let to_body = |k: u32| rot.inverse_transform_vector(&(vertices[k as usize] - x));
+            let Some((arm, depth, face)) = deepest_inside(&rock.faces, &to_body(ia), &to_body(ib)) else { continue };
+            let seen = self.contacts[first_edge_contact..].iter().any(|c| (c.arm_body_m - arm).norm() < 1e-6);
+            if depth <= self.params.penetration_slop_m || seen {
+                continue;
+            }
+            let normal = -(rot * rock.faces[face].0);
+            let m = self.terrain.triangle_material[triangle as usize] as usize;
+            let (mut mu_static, mut mu_dynamic) = self.friction[m];
+            if effects.slip_friction_max_deg.is_some() {
+                mu_dynamic = effects.slip_friction(mu_dynamic, self.slippage_m);
+                mu_static = mu_static.max(mu_dynamic);
+            }
+            let approach = (-(v + w.cross(&(rot * arm))).dot(&normal)).max(0.0);
+            let speed = v.norm();
+            let angle = if speed > 0.0 { (-v.dot(&normal) / speed).clamp(-1.0, 1.0).asin().to_degrees() } else { 90.0 };
+            self.contacts.push(Contact {
+                vertex: rock.vertices_m.len() + ia as usize,
+                point_m: x + rot * arm,
+                arm_body_m: arm,
+                normal,
+                depth_m: depth,
+                warm: (0.0, [0.0; 2]),
+                triangle,
+                cr: effects.restitution(self.cr[m], approach, angle, rock.mass_kg),
+                cr_drawn: self.cr[m],
+                mu_static,
+                mu_dynamic,
+            });
+        }
+        self.edges = edges;
     }
 
     /// The fastest contact that did not count as touching before this step and approaches faster than the bounce
     /// threshold, if any.
     fn new_impact(&self, before: &Velocities, q: &UnitQuaternion<f64>) -> Option<Contact> {
         let mut best: Option<(f64, Contact)> = None;
-        for c in &self.contacts {
+        // Hull vertices only: a terrain edge's contact is not counted as an impact.
+        for c in self.contacts.iter().filter(|c| c.vertex < self.touch_left.len()) {
             if self.touch_left[c.vertex] > 0 {
                 continue;
             }
-            let b = self.rock.vertices_m[c.vertex];
+            let b = c.arm_body_m;
             let u = before.linear_mps + q * before.angular_body_radps.cross(&b);
             let approach = -u.dot(&c.normal);
             if approach > self.params.bounce_threshold_mps && best.is_none_or(|(a, _)| approach > a) {
@@ -843,5 +900,94 @@ impl<'a> Run<'a> {
             clearance_m: clearance,
             in_contact,
         });
+    }
+}
+
+/// The deepest point of the segment a–b (body frame) inside the convex hull whose outward face planes are `faces`
+/// (n·x ≤ d inside), its depth (the distance to the nearest face plane) and that face (of faces nearly as near, the
+/// one most parallel to the segment); `None` if the segment misses the hull. The segment is clipped to the hull's half-spaces, and the depth, a concave function along it (the
+/// minimum of linear ones), is maximised by golden-section search to 10⁻⁸ of the segment's length.
+fn deepest_inside(
+    faces: &[(Vector3<f64>, f64)],
+    a: &Vector3<f64>,
+    b: &Vector3<f64>,
+) -> Option<(Vector3<f64>, f64, usize)> {
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (n, d) in faces {
+        let (da, db) = (d - n.dot(a), d - n.dot(b));
+        if da < 0.0 && db < 0.0 {
+            return None;
+        }
+        if da < 0.0 {
+            t0 = t0.max(da / (da - db));
+        } else if db < 0.0 {
+            t1 = t1.min(da / (da - db));
+        }
+        if t0 >= t1 {
+            return None;
+        }
+    }
+    let depth_at = |t: f64| {
+        let p = a + (b - a) * t;
+        let nearest = faces.iter().enumerate().map(|(k, (n, d))| (d - n.dot(&p), k));
+        nearest.fold((f64::INFINITY, 0), |m, x| if x.0 < m.0 { x } else { m })
+    };
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut lo, mut hi) = (t0, t1);
+    let (mut c, mut d) = (hi - g * (hi - lo), lo + g * (hi - lo));
+    let (mut fc, mut fd) = (depth_at(c).0, depth_at(d).0);
+    for _ in 0..40 {
+        if fc < fd {
+            (lo, c, fc) = (c, d, fd);
+            d = lo + g * (hi - lo);
+            fd = depth_at(d).0;
+        } else {
+            (hi, d, fd) = (d, c, fc);
+            c = hi - g * (hi - lo);
+            fc = depth_at(c).0;
+        }
+    }
+    let t = 0.5 * (lo + hi);
+    let p = a + (b - a) * t;
+    let (depth, _) = depth_at(t);
+    // Where two faces are nearly as near (the edge leaves the rock across the rim between them), the face the edge
+    // lies along, not the one it crosses: a terrain edge under a flat face is pressed against that face.
+    let along = (b - a).normalize();
+    let near = faces.iter().enumerate().filter(|(_, (n, d))| d - n.dot(&p) <= depth + 1e-6);
+    let face = near.min_by(|x, y| x.1 .0.dot(&along).abs().total_cmp(&y.1 .0.dot(&along).abs())).map_or(0, |f| f.0);
+    Some((p, depth, face))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The faces of the cube [−1, 1]³: outward unit normals, offset 1.
+    fn cube_faces() -> Vec<(Vector3<f64>, f64)> {
+        (0..3).flat_map(|a| [1.0, -1.0].map(|s| (Vector3::ith(a, s), 1.0))).collect()
+    }
+
+    #[test]
+    fn a_segment_is_met_at_its_deepest_point_inside_the_hull() {
+        let faces = cube_faces();
+        // Through the middle along x: deepest at the centre, 1 from every face but ±x.
+        let (p, depth, face) =
+            deepest_inside(&faces, &Vector3::new(-3.0, 0.0, 0.0), &Vector3::new(3.0, 0.0, 0.0)).unwrap();
+        assert!(p.norm() < 1e-6 && (depth - 1.0).abs() < 1e-7, "{p} {depth}");
+        assert!(faces[face].0.x == 0.0, "the face met is one the segment lies along, not ±x: {face}");
+        // Along the bottom face, 0.1 inside at x = 0 and rising 1 in 60: deepest where it meets the +x face as deep,
+        // x = 0.9 / (1 + 1/60), and pressed against the bottom face it lies along, not the +x face it crosses.
+        let (a, b) = (Vector3::new(-3.0, 0.2, -0.95), Vector3::new(3.0, 0.2, -0.85));
+        let (p, depth, face) = deepest_inside(&faces, &a, &b).unwrap();
+        assert_eq!(faces[face].0, -Vector3::z());
+        let x = 0.9 / (1.0 + 1.0 / 60.0);
+        assert!((p.x - x).abs() < 1e-6 && (depth - (1.0 - x)).abs() < 1e-6, "{p} {depth}");
+        // Through a corner region only: the edge leaves across the rim of x = 1 and z = −1.
+        let (a, b) = (Vector3::new(0.0, 0.0, -1.5), Vector3::new(1.5, 0.0, 0.0));
+        let (p, depth, _) = deepest_inside(&faces, &a, &b).unwrap();
+        assert!((depth - 0.25).abs() < 1e-6 && (p - Vector3::new(0.75, 0.0, -0.75)).norm() < 1e-5, "{p} {depth}");
+        // Missing the cube, and touching nothing but a plane beyond it.
+        assert!(deepest_inside(&faces, &Vector3::new(-3.0, 2.0, 0.0), &Vector3::new(3.0, 2.0, 0.0)).is_none());
+        assert!(deepest_inside(&faces, &Vector3::new(1.5, -3.0, 0.0), &Vector3::new(1.5, 3.0, 0.0)).is_none());
     }
 }

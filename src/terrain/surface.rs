@@ -492,6 +492,27 @@ impl Surface {
         }
     }
 
+    /// The edges of the triangles binned over [x_lo, x_hi] × [y_lo, y_hi], each once, into `out` as (lower
+    /// vertex index, higher vertex index, a triangle it bounds), sorted.
+    pub fn edges_in(&self, x_lo: f64, x_hi: f64, y_lo: f64, y_hi: f64, out: &mut Vec<(u32, u32, u32)>) {
+        out.clear();
+        let (i0, i1) = self.bin_range(x_lo, x_hi, self.x0, self.nx);
+        let (j0, j1) = self.bin_range(y_lo, y_hi, self.y0, self.ny);
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let k = j * self.nx + i;
+                for &t in &self.items[self.offsets[k] as usize..self.offsets[k + 1] as usize] {
+                    let [a, b, c] = self.triangles[t as usize];
+                    for (u, v) in [(a, b), (b, c), (c, a)] {
+                        out.push((u.min(v), u.max(v), t));
+                    }
+                }
+            }
+        }
+        out.sort_unstable();
+        out.dedup_by_key(|e| (e.0, e.1));
+    }
+
     /// Horizontal bounds (x_min, y_min, x_max, y_max) of the surface's vertices, m.
     pub fn bounds_xy(&self) -> (f64, f64, f64, f64) {
         self.extent
