@@ -905,8 +905,9 @@ impl<'a> Run<'a> {
 
 /// The deepest point of the segment a–b (body frame) inside the convex hull whose outward face planes are `faces`
 /// (n·x ≤ d inside), its depth (the distance to the nearest face plane) and that face (of faces nearly as near, the
-/// one most parallel to the segment); `None` if the segment misses the hull. The segment is clipped to the hull's half-spaces, and the depth, a concave function along it (the
-/// minimum of linear ones), is maximised by golden-section search to 10⁻⁸ of the segment's length.
+/// one most parallel to the segment); `None` if the segment misses the hull. The segment is clipped to the hull's
+/// half-spaces, and the depth, a concave function along it (the minimum of linear ones), is maximised by
+/// golden-section search to 10⁻⁸ of the segment's length.
 fn deepest_inside(
     faces: &[(Vector3<f64>, f64)],
     a: &Vector3<f64>,
@@ -949,7 +950,7 @@ fn deepest_inside(
     }
     let t = 0.5 * (lo + hi);
     let p = a + (b - a) * t;
-    let (depth, _) = depth_at(t);
+    let depth = depth_at(t).0;
     // Where two faces are nearly as near (the edge leaves the rock across the rim between them), the face the edge
     // lies along, not the one it crosses: a terrain edge under a flat face is pressed against that face.
     let along = (b - a).normalize();
