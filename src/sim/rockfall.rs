@@ -248,8 +248,9 @@ struct Run<'a> {
     contacts: Vec<Contact>,
     previous: Vec<Contact>,
     scratch: Scratch,
-    /// The terrain edges near the rock ([`SimParams::terrain_edge_contacts`]), reused between steps.
-    edges: Vec<(u32, u32, u32)>,
+    /// The terrain edges within twice the bounding radius of where the rock was when they were listed
+    /// ([`SimParams::terrain_edge_contacts`]), and that centre: listed again once the rock has moved a radius.
+    edges: (Vec<(u32, u32, u32)>, Option<Vector3<f64>>),
     last_sample: Option<(Vector3<f64>, f64)>,
     out: Outcome,
     settings: SolverSettings,
@@ -341,7 +342,7 @@ impl<'a> Run<'a> {
             contacts: Vec::with_capacity(16),
             previous: Vec::with_capacity(16),
             scratch: Scratch::default(),
-            edges: Vec::new(),
+            edges: (Vec::new(), None),
             last_sample: None,
             out,
             settings,
@@ -809,17 +810,28 @@ impl<'a> Run<'a> {
     fn detect_edges(&mut self, x: &Vector3<f64>, rot: &nalgebra::Rotation3<f64>) {
         let rock = self.rock;
         let r = rock.bounding_radius_m;
-        let mut edges = std::mem::take(&mut self.edges);
-        self.terrain.surface.edges_in(x.x - r, x.x + r, x.y - r, x.y + r, &mut edges);
+        let (mut edges, mut listed_at) = std::mem::take(&mut self.edges);
+        if listed_at.is_none_or(|c| (c.x - x.x).abs().max((c.y - x.y).abs()) > r) {
+            self.terrain.surface.edges_in(x.x - 2.0 * r, x.x + 2.0 * r, x.y - 2.0 * r, x.y + 2.0 * r, &mut edges);
+            listed_at = Some(*x);
+        }
         let vertices = self.terrain.surface.vertices();
         let first_edge_contact = self.contacts.len();
         let effects = &self.params.effects;
         let (v, w) = (self.s.velocity_mps, self.s.orientation * self.s.omega_body_radps);
+        // The rock's lowest point: an edge wholly below it cannot meet the rock.
+        let lowest = x.z + rock.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min);
+        let slop = self.params.penetration_slop_m;
         for &(ia, ib, triangle) in &edges {
+            let (ea, eb) = (vertices[ia as usize], vertices[ib as usize]);
+            if (ea.z < lowest && eb.z < lowest) || segment_distance(&ea, &eb, x) > r {
+                continue;
+            }
             let to_body = |k: u32| rot.inverse_transform_vector(&(vertices[k as usize] - x));
-            let Some((arm, depth, face)) = deepest_inside(&rock.faces, &to_body(ia), &to_body(ib)) else { continue };
-            let seen = self.contacts[first_edge_contact..].iter().any(|c| (c.arm_body_m - arm).norm() < 1e-6);
-            if depth <= self.params.penetration_slop_m || seen {
+            let Some((arm, depth, face)) = deepest_inside(&rock.faces, &to_body(ia), &to_body(ib), slop) else {
+                continue;
+            };
+            if self.contacts[first_edge_contact..].iter().any(|c| (c.arm_body_m - arm).norm() < 1e-6) {
                 continue;
             }
             let normal = -(rot * rock.faces[face].0);
@@ -846,7 +858,7 @@ impl<'a> Run<'a> {
                 mu_dynamic,
             });
         }
-        self.edges = edges;
+        self.edges = (edges, listed_at);
     }
 
     /// The fastest contact that did not count as touching before this step and approaches faster than the bounce
@@ -903,15 +915,23 @@ impl<'a> Run<'a> {
     }
 }
 
+/// The distance from `p` to the segment a–b.
+fn segment_distance(a: &Vector3<f64>, b: &Vector3<f64>, p: &Vector3<f64>) -> f64 {
+    let ab = b - a;
+    let t = ((p - a).dot(&ab) / ab.norm_squared().max(1e-300)).clamp(0.0, 1.0);
+    (a + ab * t - p).norm()
+}
+
 /// The deepest point of the segment a–b (body frame) inside the convex hull whose outward face planes are `faces`
 /// (n·x ≤ d inside), its depth (the distance to the nearest face plane) and that face (of faces nearly as near, the
-/// one most parallel to the segment); `None` if the segment misses the hull. The segment is clipped to the hull's
-/// half-spaces, and the depth, a concave function along it (the minimum of linear ones), is maximised by
-/// golden-section search to 10⁻⁸ of the segment's length.
+/// one most parallel to the segment); `None` if the segment misses the hull or lies nowhere deeper than `min_depth`.
+/// The segment is clipped to the hull's half-spaces, and the depth, a concave function along it (the minimum of linear
+/// ones), is maximised by golden-section search to 10⁻⁸ of the segment's length.
 fn deepest_inside(
     faces: &[(Vector3<f64>, f64)],
     a: &Vector3<f64>,
     b: &Vector3<f64>,
+    min_depth: f64,
 ) -> Option<(Vector3<f64>, f64, usize)> {
     let (mut t0, mut t1) = (0.0f64, 1.0f64);
     for (n, d) in faces {
@@ -927,6 +947,11 @@ fn deepest_inside(
         if t0 >= t1 {
             return None;
         }
+    }
+    // Each face's distance is linear along the segment, so the larger of its values at the clipped ends bounds it.
+    let (p0, p1) = (a + (b - a) * t0, a + (b - a) * t1);
+    if faces.iter().map(|(n, d)| (d - n.dot(&p0)).max(d - n.dot(&p1))).fold(f64::INFINITY, f64::min) <= min_depth {
+        return None;
     }
     let depth_at = |t: f64| {
         let p = a + (b - a) * t;
@@ -951,6 +976,9 @@ fn deepest_inside(
     let t = 0.5 * (lo + hi);
     let p = a + (b - a) * t;
     let depth = depth_at(t).0;
+    if depth <= min_depth {
+        return None;
+    }
     // Where two faces are nearly as near (the edge leaves the rock across the rim between them), the face the edge
     // lies along, not the one it crosses: a terrain edge under a flat face is pressed against that face.
     let along = (b - a).normalize();
@@ -973,22 +1001,24 @@ mod tests {
         let faces = cube_faces();
         // Through the middle along x: deepest at the centre, 1 from every face but ±x.
         let (p, depth, face) =
-            deepest_inside(&faces, &Vector3::new(-3.0, 0.0, 0.0), &Vector3::new(3.0, 0.0, 0.0)).unwrap();
+            deepest_inside(&faces, &Vector3::new(-3.0, 0.0, 0.0), &Vector3::new(3.0, 0.0, 0.0), 0.0).unwrap();
         assert!(p.norm() < 1e-6 && (depth - 1.0).abs() < 1e-7, "{p} {depth}");
         assert!(faces[face].0.x == 0.0, "the face met is one the segment lies along, not ±x: {face}");
         // Along the bottom face, 0.1 inside at x = 0 and rising 1 in 60: deepest where it meets the +x face as deep,
         // x = 0.9 / (1 + 1/60), and pressed against the bottom face it lies along, not the +x face it crosses.
         let (a, b) = (Vector3::new(-3.0, 0.2, -0.95), Vector3::new(3.0, 0.2, -0.85));
-        let (p, depth, face) = deepest_inside(&faces, &a, &b).unwrap();
+        let (p, depth, face) = deepest_inside(&faces, &a, &b, 0.0).unwrap();
         assert_eq!(faces[face].0, -Vector3::z());
         let x = 0.9 / (1.0 + 1.0 / 60.0);
         assert!((p.x - x).abs() < 1e-6 && (depth - (1.0 - x)).abs() < 1e-6, "{p} {depth}");
         // Through a corner region only: the edge leaves across the rim of x = 1 and z = −1.
         let (a, b) = (Vector3::new(0.0, 0.0, -1.5), Vector3::new(1.5, 0.0, 0.0));
-        let (p, depth, _) = deepest_inside(&faces, &a, &b).unwrap();
+        let (p, depth, _) = deepest_inside(&faces, &a, &b, 0.0).unwrap();
         assert!((depth - 0.25).abs() < 1e-6 && (p - Vector3::new(0.75, 0.0, -0.75)).norm() < 1e-5, "{p} {depth}");
+        // Nowhere deeper than asked: the segment above is at most 0.25 inside.
+        assert!(deepest_inside(&faces, &a, &b, 0.26).is_none() && deepest_inside(&faces, &a, &b, 0.24).is_some());
         // Missing the cube, and touching nothing but a plane beyond it.
-        assert!(deepest_inside(&faces, &Vector3::new(-3.0, 2.0, 0.0), &Vector3::new(3.0, 2.0, 0.0)).is_none());
-        assert!(deepest_inside(&faces, &Vector3::new(1.5, -3.0, 0.0), &Vector3::new(1.5, 3.0, 0.0)).is_none());
+        assert!(deepest_inside(&faces, &Vector3::new(-3.0, 2.0, 0.0), &Vector3::new(3.0, 2.0, 0.0), 0.0).is_none());
+        assert!(deepest_inside(&faces, &Vector3::new(1.5, -3.0, 0.0), &Vector3::new(1.5, 3.0, 0.0), 0.0).is_none());
     }
 }
