@@ -1089,7 +1089,8 @@ fn a_bad_flag_value_names_the_flag_and_an_output_folder_that_cannot_be_made_a_fi
     let err = run(&["--repeats", "2", "--out", out_arg]);
     assert!(err.starts_with("error: --repeats: 2 is too few") && err.contains("how to fix"), "{err}");
     let err = run(&["--repeats", "3", "--out", out_arg]);
-    assert!(err.contains("error: the default settings (change them with --config FILE): search_repeats: must be in [1, --repeats = 3]"), "{err}");
+    let (default, key) = ("error: the default settings (change them with --config FILE): ", "search_repeats: must be");
+    assert!(err.contains(&format!("{default}{key} in [1, --repeats = 3]")), "{err}");
     let err = run(&["--kfold", "5", "--kfold-repeats", "0", "--out", out_arg]);
     assert!(err.starts_with("error: --kfold-repeats: must be in [1, 10], got 0"), "{err}");
     // The same value from a settings file is named as its key there.

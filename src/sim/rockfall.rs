@@ -249,8 +249,10 @@ struct Run<'a> {
     previous: Vec<Contact>,
     scratch: Scratch,
     /// The terrain edges within twice the bounding radius of where the rock was when they were listed
-    /// ([`SimParams::terrain_edge_contacts`]), and that centre: listed again once the rock has moved a radius.
-    edges: (Vec<(u32, u32, u32)>, Option<Vector3<f64>>),
+    /// ([`SimParams::terrain_edge_contacts`]), listed again once the rock has moved a radius from there.
+    edges: Vec<(u32, u32, u32)>,
+    /// Where the rock was when `edges` were listed.
+    edges_listed_at: Option<Vector3<f64>>,
     last_sample: Option<(Vector3<f64>, f64)>,
     out: Outcome,
     settings: SolverSettings,
@@ -342,7 +344,8 @@ impl<'a> Run<'a> {
             contacts: Vec::with_capacity(16),
             previous: Vec::with_capacity(16),
             scratch: Scratch::default(),
-            edges: (Vec::new(), None),
+            edges: Vec::new(),
+            edges_listed_at: None,
             last_sample: None,
             out,
             settings,
@@ -810,10 +813,10 @@ impl<'a> Run<'a> {
     fn detect_edges(&mut self, x: &Vector3<f64>, rot: &nalgebra::Rotation3<f64>) {
         let rock = self.rock;
         let r = rock.bounding_radius_m;
-        let (mut edges, mut listed_at) = std::mem::take(&mut self.edges);
-        if listed_at.is_none_or(|c| (c.x - x.x).abs().max((c.y - x.y).abs()) > r) {
+        let mut edges = std::mem::take(&mut self.edges);
+        if self.edges_listed_at.is_none_or(|c| (c.x - x.x).abs().max((c.y - x.y).abs()) > r) {
             self.terrain.surface.edges_in(x.x - 2.0 * r, x.x + 2.0 * r, x.y - 2.0 * r, x.y + 2.0 * r, &mut edges);
-            listed_at = Some(*x);
+            self.edges_listed_at = Some(*x);
         }
         let vertices = self.terrain.surface.vertices();
         let first_edge_contact = self.contacts.len();
@@ -858,7 +861,7 @@ impl<'a> Run<'a> {
                 mu_dynamic,
             });
         }
-        self.edges = (edges, listed_at);
+        self.edges = edges;
     }
 
     /// The fastest contact that did not count as touching before this step and approaches faster than the bounce
