@@ -232,10 +232,12 @@ struct Run<'a> {
     touch_left: Vec<u32>,
     /// Per hull vertex: the restitution drawn at its last touch (kept while it counts as touching).
     vertex_cr: Vec<f64>,
-    /// How long what acts in contact still acts after the last touch, s, and the contact's averaged normal and drag
-    /// rate (1/s) it acts with.
+    /// How long what acts in contact still acts after the last touch, s.
     brake_left_s: f64,
-    brake_at: (Vector3<f64>, f64),
+    /// The averaged normal of the last touch, which rolling resistance acts against (set only when it is on).
+    roll_normal: Vector3<f64>,
+    /// The soft-ground drag rate of the last touch, 1/s.
+    touch_drag_per_s: f64,
     barrier_met: Vec<bool>,
     /// Soft-ground drag rate of each material, 1/s: its own, or the `soft_drag_per_s` effect's where that acts.
     drag_per_s: Vec<f64>,
@@ -324,7 +326,8 @@ impl<'a> Run<'a> {
             touch_left: vec![0; rock.vertices_m.len()],
             vertex_cr: vec![0.0; rock.vertices_m.len()],
             brake_left_s: 0.0,
-            brake_at: (Vector3::z(), 0.0),
+            roll_normal: Vector3::z(),
+            touch_drag_per_s: 0.0,
             barrier_met: vec![false; terrain.barriers.len()],
             drag_per_s: terrain
                 .materials
@@ -603,7 +606,7 @@ impl<'a> Run<'a> {
             // hold: applied after the solve (as the drags are), it took the spin and the speed along the ground
             // but not the normal speed that went with them, and a rock at rest on a slope lifted off every few
             // dozen steps and never counted as stopped.
-            self.brake_at.0 = self.contacts.iter().fold(Vector3::zeros(), |a, c| a + c.normal).normalize();
+            self.roll_normal = self.contacts.iter().fold(Vector3::zeros(), |a, c| a + c.normal).normalize();
             self.roll(&mut free, h);
         }
         let mut after = free;
@@ -657,7 +660,7 @@ impl<'a> Run<'a> {
                 .iter()
                 .map(|k| self.drag_per_s[self.terrain.triangle_material[k.triangle as usize] as usize])
                 .fold(0.0, f64::max);
-            self.brake_at.1 = drag;
+            self.touch_drag_per_s = drag;
             self.brake_left_s = self.params.contact_duration_s;
         }
         // Acting for the rest of the contact's duration only (all of `h` but in the step that ends it).
@@ -706,7 +709,7 @@ impl<'a> Run<'a> {
     /// Rolling resistance (when on) over `h` on a rock in contact, against the averaged normal of its last touch:
     /// in a step in contact on the velocities the solver starts from, after the last touch on the step's result.
     fn roll(&self, vel: &mut Velocities, h: f64) {
-        let n = self.brake_at.0;
+        let n = self.roll_normal;
         if let Some(mu_r) = self.params.effects.rolling_resistance {
             let v = vel.linear_mps;
             let along = v - n * v.dot(&n);
@@ -731,7 +734,7 @@ impl<'a> Run<'a> {
     /// Drag (the largest soft-ground rate among the touched materials plus the vegetation drag, then the scarring
     /// drag) on a rock in contact over a step of `h`, with the soft-ground rate of its last touch.
     fn brake(&self, vel: &mut Velocities, h: f64) {
-        let c = self.brake_at.1 + self.vegetation_drag_per_s;
+        let c = self.touch_drag_per_s + self.vegetation_drag_per_s;
         if c > 0.0 {
             let f = (-c * h).exp();
             vel.linear_mps *= f;
@@ -759,11 +762,7 @@ impl<'a> Run<'a> {
             let p = x + rot * b;
             let Some((depth, mut normal, triangle)) = self.vertex_penetration(&p, top) else { continue };
             let m = self.terrain.triangle_material[triangle as usize] as usize;
-            let (mut mu_static, mut mu_dynamic) = self.friction[m];
-            if effects.slip_friction_max_deg.is_some() {
-                mu_dynamic = effects.slip_friction(mu_dynamic, self.slippage_m);
-                mu_static = mu_static.max(mu_dynamic);
-            }
+            let (mu_static, mu_dynamic) = self.friction_of(m);
             let new = self.touch_left[i] == 0;
             let mut cr = if !new {
                 self.vertex_cr[i]
@@ -784,8 +783,7 @@ impl<'a> Run<'a> {
             }
             let u = v + w.cross(&(rot * b));
             let approach = (-u.dot(&normal)).max(0.0);
-            let speed = v.norm();
-            let angle = if speed > 0.0 { (-v.dot(&normal) / speed).clamp(-1.0, 1.0).asin().to_degrees() } else { 90.0 };
+            let angle = incidence_deg(&v, &normal);
             cr = effects.restitution(cr, approach, angle, self.rock.mass_kg);
             self.contacts.push(Contact {
                 vertex: i,
@@ -804,6 +802,18 @@ impl<'a> Run<'a> {
         if self.params.terrain_edge_contacts {
             self.detect_edges(x, &rot);
         }
+    }
+
+    /// tan of the static and dynamic friction angles of material `m` now (the dynamic one moved by the slippage of
+    /// `slip_friction_max_deg` when on, the static one at least as high).
+    fn friction_of(&self, m: usize) -> (f64, f64) {
+        let effects = &self.params.effects;
+        let (mu_static, mu_dynamic) = self.friction[m];
+        if effects.slip_friction_max_deg.is_none() {
+            return (mu_static, mu_dynamic);
+        }
+        let mu_dynamic = effects.slip_friction(mu_dynamic, self.slippage_m);
+        (mu_static.max(mu_dynamic), mu_dynamic)
     }
 
     /// Adds the terrain edges that pass through the rock at the pose (x, rot) more than `penetration_slop_m` deep
@@ -839,14 +849,9 @@ impl<'a> Run<'a> {
             }
             let normal = -(rot * rock.faces[face].0);
             let m = self.terrain.triangle_material[triangle as usize] as usize;
-            let (mut mu_static, mut mu_dynamic) = self.friction[m];
-            if effects.slip_friction_max_deg.is_some() {
-                mu_dynamic = effects.slip_friction(mu_dynamic, self.slippage_m);
-                mu_static = mu_static.max(mu_dynamic);
-            }
+            let (mu_static, mu_dynamic) = self.friction_of(m);
             let approach = (-(v + w.cross(&(rot * arm))).dot(&normal)).max(0.0);
-            let speed = v.norm();
-            let angle = if speed > 0.0 { (-v.dot(&normal) / speed).clamp(-1.0, 1.0).asin().to_degrees() } else { 90.0 };
+            let angle = incidence_deg(&v, &normal);
             self.contacts.push(Contact {
                 vertex: rock.vertices_m.len() + ia as usize,
                 point_m: x + rot * arm,
@@ -915,6 +920,16 @@ impl<'a> Run<'a> {
             clearance_m: clearance,
             in_contact,
         });
+    }
+}
+
+/// The angle between the velocity `v` and the ground of upward `normal`, degrees (90 at rest: ours, a drop).
+fn incidence_deg(v: &Vector3<f64>, normal: &Vector3<f64>) -> f64 {
+    let speed = v.norm();
+    if speed > 0.0 {
+        (-v.dot(normal) / speed).clamp(-1.0, 1.0).asin().to_degrees()
+    } else {
+        90.0
     }
 }
 
