@@ -662,12 +662,11 @@ fn no_impact_adds_energy_and_no_rock_ends_below_the_surface() {
     assert!(total_impacts > 50, "only {total_impacts} impacts: the test is not exercising impacts");
 }
 
-#[test]
-fn no_tunnelling_through_a_thin_wall_at_40_mps() {
-    // A flat floor with a wall 0.2 m thick and 3 m high across x = 30 m.
+/// A flat floor 60 m long with a wall `thickness_m` thick and 3 m high across it, from x = 30 m.
+fn floor_with_wall(thickness_m: f64) -> Terrain {
     let m = material(0.3, 40.0, 30.0);
     let mut v = Vec::new();
-    let xs = [0.0, 29.9, 29.9001, 30.0999, 30.1, 60.0];
+    let xs = [0.0, 29.9, 29.9001, 29.9001 + thickness_m, 29.9002 + thickness_m, 60.0];
     let zs = [0.0, 0.0, 3.0, 3.0, 0.0, 0.0];
     for y in [0.0, 20.0] {
         for (x, z) in xs.iter().zip(zs) {
@@ -680,7 +679,12 @@ fn no_tunnelling_through_a_thin_wall_at_40_mps() {
         t.push([i, i + 1, n + i + 1]);
         t.push([i, n + i + 1, n + i]);
     }
-    let terrain = Terrain::from_local(v, &t, &vec![0; t.len()], vec![m]).unwrap();
+    Terrain::from_local(v, &t, &vec![0; t.len()], vec![m]).unwrap()
+}
+
+#[test]
+fn no_tunnelling_through_a_thin_wall_at_40_mps() {
+    let terrain = floor_with_wall(0.2);
     for shape in [ShapeKind::Cube, ShapeKind::Smartie] {
         let r = rock(shape, 100.0);
         let start = RigidState {
@@ -698,12 +702,41 @@ fn no_tunnelling_through_a_thin_wall_at_40_mps() {
             &mut (),
         );
         assert!(
-            out.final_state.position_m.x < 30.0,
+            out.final_state.position_m.x < 29.9,
             "{} went through the wall: {:?}",
             r.shape,
             out.final_state.position_m
         );
     }
+}
+
+#[test]
+fn at_the_coarsest_step_a_rock_at_100_mps_neither_enters_nor_passes_a_half_metre_wall() {
+    // dt_s = 0.01 without impact sub-steps moves a rock at 100 m/s a metre a step, twice the wall's thickness: a
+    // hull vertex met past the wall's midline was pushed on through it. `max_contact_travel_m` cuts such steps so
+    // no vertex moves more than 0.2 m in one; with it out of the way (10 m) rocks pass, which the test asserts too.
+    let terrain = floor_with_wall(0.5);
+    let outcomes = |travel_m: f64| {
+        let params = SimParams { dt_s: 0.01, impact_substeps: 1, max_contact_travel_m: travel_m, ..Default::default() };
+        (0..30u64)
+            .map(|k| {
+                let shape = [ShapeKind::Cube, ShapeKind::FlatBox, ShapeKind::Smartie][k as usize % 3].clone();
+                let r = rock(shape, [1.0, 30.0, 1000.0][k as usize / 3 % 3]);
+                let start = RigidState {
+                    position_m: Vector3::new(10.0, 10.0, 0.3 + r.bounding_radius_m),
+                    velocity_mps: Vector3::new(100.0, 0.0, 0.0),
+                    orientation: UnitQuaternion::from_euler_angles(0.3 * k as f64, 0.7 * k as f64, 1.1 * k as f64),
+                    omega_body_radps: Vector3::new(0.0, 20.0 * (k % 10) as f64, 0.0),
+                };
+                simulate(&terrain, &r, start, &params, &mut stream(k, 0), &mut ()).final_state.position_m
+            })
+            .collect::<Vec<_>>()
+    };
+    for x in outcomes(SimParams::default().max_contact_travel_m) {
+        assert!(x.x < 29.9 || x.z > 3.0, "a rock ended in or past the wall, at {x:?}");
+    }
+    let through = outcomes(10.0).iter().filter(|x| x.x > 29.9 && x.z < 3.0).count();
+    assert!(through > 0, "no rock went into or through the wall without the travel limit: the test tests nothing");
 }
 
 #[test]

@@ -271,6 +271,9 @@ enum BarrierEffect {
 const GRAVITY: Vector3<f64> = Vector3::new(0.0, 0.0, -GRAVITY_MPS2);
 /// Extra clearance required of a ballistic step, m (ours).
 const FLIGHT_MARGIN_M: f64 = 0.05;
+/// Most Moreau steps a contact step is cut into by `max_contact_travel_m` (ours: at the shortest travel, 1 cm, and
+/// a 10 ms step, points moving up to 1 km/s; a bound on the work of one step whatever the input).
+const MAX_TRAVEL_SUBSTEPS: usize = 1000;
 
 /// The first time in (`on_s`, `off_s`] at which `off` holds, to 1 µs, by bisection, given that it does not hold at
 /// `on_s` and holds at `off_s` (ours: a flight piece is at most `sample_spacing_m` long, so it crosses an edge once).
@@ -538,20 +541,38 @@ impl<'a> Run<'a> {
     }
 
     /// One step of `dt_s` near the ground, taken as `impact_substeps` Moreau steps when an impact lies ahead in it
-    /// (ours: the motion between impacts keeps `dt_s`). A touch counts as a contact for whole steps of `dt_s` (the
+    /// (ours: the motion between impacts keeps `dt_s`), and as at least as many as keep every point of the rock
+    /// within `max_contact_travel_m` a step (ours). A touch counts as a contact for whole steps of `dt_s` (the
     /// counters move once a step). Returns whether there was a contact.
     fn contact_step(&mut self, observer: &mut impl Observer) -> bool {
         let h = self.params.dt_s;
         let n = self.params.impact_substeps;
-        let in_contact = if n > 1 && self.impact_ahead(h) {
-            (0..n).fold(false, |any, _| self.moreau_step(observer, h / n as f64) | any)
-        } else {
-            self.moreau_step(observer, h)
-        };
+        let by_travel = self.steps_by_travel(h);
+        let steps = if n > by_travel && self.impact_ahead(h) { n } else { by_travel };
+        let in_contact = (0..steps).fold(false, |any, _| self.moreau_step(observer, h / steps as f64) | any);
         for t in self.touch_left.iter_mut() {
             *t = t.saturating_sub(1);
         }
         in_contact
+    }
+
+    /// The fewest equal Moreau steps over `h` that keep every hull vertex within `max_contact_travel_m` a step at
+    /// its present speed (at most [`MAX_TRAVEL_SUBSTEPS`]).
+    fn steps_by_travel(&self, h: f64) -> usize {
+        let w = &self.s.omega_body_radps;
+        let bound_mps = self.s.velocity_mps.norm() + w.norm() * self.rock.bounding_radius_m;
+        if bound_mps * h <= self.params.max_contact_travel_m {
+            return 1;
+        }
+        let v_body = self.s.orientation.inverse_transform_vector(&self.s.velocity_mps);
+        let fastest_mps =
+            self.rock.vertices_m.iter().map(|b| (v_body + w.cross(b)).norm_squared()).fold(0.0, f64::max).sqrt();
+        let steps = (fastest_mps * h / self.params.max_contact_travel_m).ceil();
+        if steps > 1.0 {
+            (steps as usize).min(MAX_TRAVEL_SUBSTEPS)
+        } else {
+            1
+        }
     }
 
     /// Whether a hull vertex that does not count as touching lies below the ground at the end pose of a free step
