@@ -519,6 +519,59 @@ fn with_terrain_edge_contacts_blocks_dropped_on_a_knife_ridge_stay_on_top_of_it(
 }
 
 /// A ball: the convex hull of 600 points spread evenly over a sphere (a Fibonacci lattice).
+#[test]
+fn with_terrain_edge_contacts_blocks_tipping_over_a_crest_gain_no_energy() {
+    // A flat top ending in a 60° face, in 5 m cells, under boxes of 20–60 t released at rest across its crest: they
+    // tip over it on their own edges. The contact normal of a terrain edge met by a hull edge is perpendicular to
+    // both; with a face's normal instead, the box moved into the crest along the other face unresisted, and the
+    // depth projected out every step lifted it (gains of up to 0.6 MJ on the bench stack).
+    let tan = 60f64.to_radians().tan();
+    let ground = move |x: f64| if x < 20.0 { 60.0 } else { 60.0 - (x - 20.0) * tan };
+    let terrain = Terrain::from_function(40.0, 8, material(0.3, 35.0, 30.0), move |x, _| ground(x)).unwrap();
+    let params = SimParams { max_time_s: 3.0, terrain_edge_contacts: true, ..Default::default() };
+    let mut gains = Vec::new();
+    for i in 0..60u64 {
+        let r = rock(ShapeKind::FlatBox, 20_000.0 + 40_000.0 * (i as f64 / 59.0));
+        let mut rng = stream(7, i);
+        let u = [0; 3].map(|_| talus::random::uniform(&mut rng));
+        let q = UnitQuaternion::from_euler_angles(u[0] * 6.3, u[1] * 6.3, u[2] * 6.3);
+        let mut start = at_rest(Vector3::new(18.0 + 2.0 * u[0], 15.0 + 10.0 * u[1], 0.0), q);
+        talus::source::place_above_ground(&terrain, &r, &mut start, 0.1, true);
+        let mut rec = Record::default();
+        simulate(&terrain, &r, start, &params, &mut stream(1, i), &mut rec);
+        let energy = |s: &Sample| s.kinetic_j + r.mass_kg * GRAVITY_MPS2 * s.position_m.z;
+        let e0 = energy(&rec.samples[0]);
+        let gain = rec.samples.iter().map(|s| energy(s) - e0).fold(0.0, f64::max);
+        // 1 kJ: a tenth of what a 20 t block releases falling 5 cm.
+        if gain > 1000.0 {
+            gains.push((i, gain));
+        }
+    }
+    assert!(gains.is_empty(), "blocks gained energy (block, J): {gains:?}");
+}
+
+#[test]
+fn with_terrain_edge_contacts_a_slab_lying_on_terrain_edges_alone_comes_to_rest() {
+    // A 17 m square slab 0.86 m thick (660 t) laid on a 10 m wide flat top of 5 m cells, between the terrain's own
+    // edge and a 45° face: its corners hang over both, so only the terrain edges under it hold it. Every slab must
+    // count as at rest. (Met at the slop itself, the edges were pushed clear every few steps, the slab fell a step,
+    // and 2 of these 20 ran to the time limit, as one slab of an audit did.)
+    let terrain =
+        Terrain::from_function(60.0, 12, material(0.3, 35.0, 30.0), |x, _| if x < 10.0 { 30.0 } else { 40.0 - x })
+            .unwrap();
+    let size = RockSize::Dimensions { size_m: [17.1, 17.1, 0.86], density_kg_m3: 2650.0 };
+    let slab = RockBody::new(&ShapeKind::FlatBox, size, "slab").unwrap();
+    let params = SimParams { max_time_s: 20.0, terrain_edge_contacts: true, ..Default::default() };
+    for k in 0..20u64 {
+        let kf = k as f64;
+        let position = Vector3::new(4.0 + 0.1 * (kf % 7.0), 30.0 + 0.13 * (kf % 5.0), 30.53);
+        let tilt = UnitQuaternion::from_euler_angles(0.002 * (kf % 3.0 - 1.0), 0.0015 * (kf % 4.0 - 1.5), 0.3 * kf);
+        let out = simulate(&terrain, &slab, at_rest(position, tilt), &params, &mut stream(1, k), &mut ());
+        assert_eq!(out.stop_reason, StopReason::Stopped, "slab {k} ended at {:?}", out.final_state.position_m);
+        assert!((out.final_state.position_m.z - 30.43).abs() < 0.005, "slab {k} rests at {:?}", out.final_state);
+    }
+}
+
 fn ball(mass_kg: f64) -> RockBody {
     let points: Vec<[f64; 3]> = (0..600)
         .map(|i| {

@@ -837,9 +837,10 @@ impl<'a> Run<'a> {
         (mu_static.max(mu_dynamic), mu_dynamic)
     }
 
-    /// Adds the terrain edges that pass through the rock at the pose (x, rot) more than `penetration_slop_m` deep
-    /// as contacts ([`SimParams::terrain_edge_contacts`]): at the edge's deepest point, with the normal of the
-    /// hull face nearest to it, pointing into the rock; the restitution is the rock's draw for the edge's material
+    /// Adds the terrain edges that pass through the rock at the pose (x, rot) more than half `penetration_slop_m`
+    /// deep as contacts ([`SimParams::terrain_edge_contacts`]): at the edge's deepest point, with the normal of the
+    /// hull face nearest to it or of the hull edge it meets there ([`deepest_inside`]), pointing into the rock; the
+    /// restitution is the rock's draw for the edge's material
     /// (no roughness tilt; not counted as an impact). Edges meeting at a buried terrain vertex give it once.
     fn detect_edges(&mut self, x: &Vector3<f64>, rot: &nalgebra::Rotation3<f64>) {
         let rock = self.rock;
@@ -855,20 +856,23 @@ impl<'a> Run<'a> {
         let (v, w) = (self.s.velocity_mps, self.s.orientation * self.s.omega_body_radps);
         // The rock's lowest point: an edge wholly below it cannot meet the rock.
         let lowest = x.z + rock.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min);
-        let slop = self.params.penetration_slop_m;
+        // Met at half the slop (ours): the depth is projected out beyond the slop, so a rock held by edges alone
+        // rests between the two; met at the slop itself, it was pushed clear every few steps, fell a step, and
+        // never counted as at rest (a 660 t slab lying on the edges of a crest ran to `max_time_s`).
+        let meet_m = 0.5 * self.params.penetration_slop_m;
         for &(ia, ib, triangle) in &edges {
             let (ea, eb) = (vertices[ia as usize], vertices[ib as usize]);
             if (ea.z < lowest && eb.z < lowest) || segment_distance(&ea, &eb, x) > r {
                 continue;
             }
             let to_body = |k: u32| rot.inverse_transform_vector(&(vertices[k as usize] - x));
-            let Some((arm, depth, face)) = deepest_inside(&rock.faces, &to_body(ia), &to_body(ib), slop) else {
+            let Some((arm, depth, outward)) = deepest_inside(&rock.faces, &to_body(ia), &to_body(ib), meet_m) else {
                 continue;
             };
             if self.contacts[first_edge_contact..].iter().any(|c| (c.arm_body_m - arm).norm() < 1e-6) {
                 continue;
             }
-            let normal = -(rot * rock.faces[face].0);
+            let normal = -(rot * outward);
             let m = self.terrain.triangle_material[triangle as usize] as usize;
             let (mu_static, mu_dynamic) = self.friction_of(m);
             let approach = (-(v + w.cross(&(rot * arm))).dot(&normal)).max(0.0);
@@ -962,8 +966,9 @@ fn segment_distance(a: &Vector3<f64>, b: &Vector3<f64>, p: &Vector3<f64>) -> f64
 }
 
 /// The deepest point of the segment a–b (body frame) inside the convex hull whose outward face planes are `faces`
-/// (n·x ≤ d inside), its depth (the distance to the nearest face plane) and that face (of faces nearly as near, the
-/// one most parallel to the segment); `None` if the segment misses the hull or lies nowhere deeper than `min_depth`.
+/// (n·x ≤ d inside), its depth (the distance to the nearest face plane) and the outward normal of the contact there
+/// (the nearest face's, or for two faces as near, that of the hull's edge between them against the segment);
+/// `None` if the segment misses the hull or lies nowhere deeper than `min_depth`.
 /// The segment is clipped to the hull's half-spaces, and the depth, a concave function along it (the minimum of linear
 /// ones), is maximised by golden-section search to 10⁻⁸ of the segment's length.
 fn deepest_inside(
@@ -971,7 +976,7 @@ fn deepest_inside(
     a: &Vector3<f64>,
     b: &Vector3<f64>,
     min_depth: f64,
-) -> Option<(Vector3<f64>, f64, usize)> {
+) -> Option<(Vector3<f64>, f64, Vector3<f64>)> {
     let (mut t0, mut t1) = (0.0f64, 1.0f64);
     for (n, d) in faces {
         let (da, db) = (d - n.dot(a), d - n.dot(b));
@@ -1018,12 +1023,33 @@ fn deepest_inside(
     if depth <= min_depth {
         return None;
     }
-    // Where two faces are nearly as near (the edge leaves the rock across the rim between them), the face the edge
-    // lies along, not the one it crosses: a terrain edge under a flat face is pressed against that face.
-    let along = (b - a).normalize();
-    let near = faces.iter().enumerate().filter(|(_, (n, d))| d - n.dot(&p) <= depth + 1e-6);
-    let face = near.min_by(|x, y| x.1 .0.dot(&along).abs().total_cmp(&y.1 .0.dot(&along).abs())).map_or(0, |f| f.0);
-    Some((p, depth, face))
+    // Where two faces are as near, the segment meets the hull's edge between them: the normal of that edge-edge
+    // contact is perpendicular to both edges (as in the separating-axis test), which for a segment lying along one
+    // of the faces is that face's normal (a terrain edge under a flat face is pressed against that face). Taking
+    // either face's normal instead let the rock move into the segment along the other, unresisted, and the depth
+    // projected out every step lifted it (a 57 t box tipping over a bench crest gained 0.05 MJ). A segment along
+    // the hull's edge itself takes the mean of the two normals.
+    let mut near: Vec<(f64, &Vector3<f64>)> =
+        faces.iter().map(|(n, d)| (d - n.dot(&p), n)).filter(|(dist, _)| *dist <= depth + 1e-6).collect();
+    near.sort_by(|x, y| x.0.total_cmp(&y.0));
+    let n1 = near.first()?.1;
+    // The next nearest face that meets the first in an edge (not one parallel to it, as across a thin slab).
+    let Some(n2) = near[1..].iter().map(|f| f.1).find(|n| n1.cross(n).norm() > 1e-6) else {
+        return Some((p, depth, *n1));
+    };
+    let hull_edge = n1.cross(n2).normalize();
+    let across = (b - a).normalize().cross(&hull_edge);
+    let outward = if across.norm() > 1e-3 {
+        let c = across.normalize();
+        if c.dot(&(n1 + n2)) < 0.0 {
+            -c
+        } else {
+            c
+        }
+    } else {
+        (n1 + n2).normalize()
+    };
+    Some((p, depth, outward))
 }
 
 #[cfg(test)]
@@ -1039,21 +1065,30 @@ mod tests {
     fn a_segment_is_met_at_its_deepest_point_inside_the_hull() {
         let faces = cube_faces();
         // Through the middle along x: deepest at the centre, 1 from every face but ±x.
-        let (p, depth, face) =
+        let (p, depth, outward) =
             deepest_inside(&faces, &Vector3::new(-3.0, 0.0, 0.0), &Vector3::new(3.0, 0.0, 0.0), 0.0).unwrap();
         assert!(p.norm() < 1e-6 && (depth - 1.0).abs() < 1e-7, "{p} {depth}");
-        assert!(faces[face].0.x == 0.0, "the face met is one the segment lies along, not ±x: {face}");
+        assert!(outward.x == 0.0, "the face met is one the segment lies along, not ±x: {outward}");
         // Along the bottom face, 0.1 inside at x = 0 and rising 1 in 60: deepest where it meets the +x face as deep,
-        // x = 0.9 / (1 + 1/60), and pressed against the bottom face it lies along, not the +x face it crosses.
+        // x = 0.9 / (1 + 1/60), on the cube's edge between the two faces: the normal is perpendicular to both edges,
+        // (1/60, 0, −1), nearly the bottom face's, which the segment nearly lies along.
         let (a, b) = (Vector3::new(-3.0, 0.2, -0.95), Vector3::new(3.0, 0.2, -0.85));
-        let (p, depth, face) = deepest_inside(&faces, &a, &b, 0.0).unwrap();
-        assert_eq!(faces[face].0, -Vector3::z());
+        let (p, depth, outward) = deepest_inside(&faces, &a, &b, 0.0).unwrap();
+        assert!((outward - Vector3::new(1.0 / 60.0, 0.0, -1.0).normalize()).norm() < 1e-9, "{outward}");
         let x = 0.9 / (1.0 + 1.0 / 60.0);
         assert!((p.x - x).abs() < 1e-6 && (depth - (1.0 - x)).abs() < 1e-6, "{p} {depth}");
-        // Through a corner region only: the edge leaves across the rim of x = 1 and z = −1.
+        // Through a corner region only: the edge leaves across the rim of x = 1 and z = −1, and the cube's edge there
+        // (along y) crosses it square: the normal bisects the two faces'.
         let (a, b) = (Vector3::new(0.0, 0.0, -1.5), Vector3::new(1.5, 0.0, 0.0));
-        let (p, depth, _) = deepest_inside(&faces, &a, &b, 0.0).unwrap();
+        let (p, depth, outward) = deepest_inside(&faces, &a, &b, 0.0).unwrap();
         assert!((depth - 0.25).abs() < 1e-6 && (p - Vector3::new(0.75, 0.0, -0.75)).norm() < 1e-5, "{p} {depth}");
+        assert!((outward - Vector3::new(1.0, 0.0, -1.0).normalize()).norm() < 1e-9, "{outward}");
+        // Across the same rim at a slant (rising along y too): perpendicular to the segment and to the cube's edge.
+        let (a, b) = (Vector3::new(0.0, -0.5, -1.5), Vector3::new(1.5, 0.5, 0.0));
+        let (_, _, outward) = deepest_inside(&faces, &a, &b, 0.0).unwrap();
+        let expected = (b - a).cross(&Vector3::y()).normalize();
+        assert!((outward - expected).norm() < 1e-9 || (outward + expected).norm() < 1e-9, "{outward}");
+        assert!(outward.x > 0.0 && outward.z < 0.0, "{outward}");
         // Nowhere deeper than asked: the segment above is at most 0.25 inside.
         assert!(deepest_inside(&faces, &a, &b, 0.26).is_none() && deepest_inside(&faces, &a, &b, 0.24).is_some());
         // Missing the cube, and touching nothing but a plane beyond it.
