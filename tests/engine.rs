@@ -520,6 +520,31 @@ fn with_terrain_edge_contacts_blocks_dropped_on_a_knife_ridge_stay_on_top_of_it(
 
 /// A ball: the convex hull of 600 points spread evenly over a sphere (a Fibonacci lattice).
 #[test]
+fn with_terrain_edge_contacts_a_cube_dropped_flat_on_a_knife_ridge_rebounds_with_cr_and_no_spin() {
+    // A 1 m cube dropped flat from 2 m onto a crest of 60° flanks under the middle of its bottom face, the crest
+    // along y: no hull vertex touches, the crest meets the face along a line. The impact is the edge's, reported as
+    // one, and the rebound is Cr times the impact speed with no spin, as on flat ground.
+    let cr = 0.5;
+    let tan = 60f64.to_radians().tan();
+    let terrain =
+        Terrain::from_function(40.0, 4, material(cr, 40.0, 30.0), move |x, _| 30.0 - (x - 20.0).abs() * tan).unwrap();
+    let r = rock(ShapeKind::Cube, 2650.0);
+    let drop_m = 2.0;
+    let start = at_rest(Vector3::new(20.0, 15.3, 30.5 + drop_m), UnitQuaternion::identity());
+    let params = SimParams { max_time_s: 1.5, terrain_edge_contacts: true, ..SimParams::default() };
+    let mut rec = Record::default();
+    simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut rec);
+    let first = rec.impacts.first().expect("an impact");
+    let v_in = (2.0 * GRAVITY_MPS2 * drop_m).sqrt();
+    assert_relative_eq!(first.approach_speed_mps, v_in, max_relative = 0.01);
+    assert!((first.point_m.x - 20.0).abs() < 1e-3 && (first.point_m.z - 30.0).abs() < 0.01, "{:?}", first.point_m);
+    let rising = rec.rebound().expect("rising");
+    let v_out = (rising.velocity_mps.z.powi(2) + 2.0 * GRAVITY_MPS2 * rising.clearance_m).sqrt();
+    assert_relative_eq!(v_out, cr * v_in, max_relative = 0.02);
+    assert!(rising.spin_radps < 0.01, "spin {}", rising.spin_radps);
+}
+
+#[test]
 fn with_terrain_edge_contacts_blocks_tipping_over_a_crest_gain_no_energy() {
     // A flat top ending in a 60° face, in 5 m cells, under boxes of 20–60 t released at rest across its crest: they
     // tip over it on their own edges. The contact normal of a terrain edge met by a hull edge is perpendicular to

@@ -25,7 +25,7 @@ use nalgebra::{Matrix2, UnitQuaternion, Vector2, Vector3};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Contact {
     /// Index of the rock's hull vertex; for a terrain edge inside the rock ([`SimParams::terrain_edge_contacts`]),
-    /// the hull's vertex count plus the edge's lower terrain vertex index.
+    /// an index past the hull's vertices that names the edge (from its two terrain vertex indices).
     ///
     /// [`SimParams::terrain_edge_contacts`]: super::SimParams::terrain_edge_contacts
     pub vertex: usize,

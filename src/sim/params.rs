@@ -106,7 +106,8 @@ pub struct SimParams {
     /// with 60° flanks came to rest with the crest up to 0.9 m inside them). With this on, each terrain edge near
     /// the rock is clipped to the hull; where its deepest point lies more than half `penetration_slop_m` inside,
     /// that point is a contact with the normal of the nearest hull face (or, where it meets a hull edge, the normal
-    /// perpendicular to both edges), pointing into the rock. Off by default until
+    /// perpendicular to both edges), pointing into the rock; an edge lying along a face, the two ends of the stretch
+    /// that deep. They are impacts as vertex contacts are. Off by default until
     /// the studies have been run again with it: it changes results wherever the ground is convex under a rock.
     pub terrain_edge_contacts: bool,
     /// Optional effects (default: none).

@@ -232,6 +232,9 @@ struct Run<'a> {
     touch_left: Vec<u32>,
     /// Per hull vertex: the restitution drawn at its last touch (kept while it counts as touching).
     vertex_cr: Vec<f64>,
+    /// The terrain edges that count as touching ([`SimParams::terrain_edge_contacts`]), as the vertex contacts of
+    /// `touch_left` and `vertex_cr` do: (contact index, triangle, steps left, restitution drawn).
+    edge_touch: Vec<(usize, u32, u32, f64)>,
     /// How long what acts in contact still acts after the last touch, s.
     brake_left_s: f64,
     /// The averaged normal of the last touch, which rolling resistance acts against (set only when it is on).
@@ -328,6 +331,7 @@ impl<'a> Run<'a> {
             touch_steps: ((params.contact_duration_s / params.dt_s).round() as u32).max(1),
             touch_left: vec![0; rock.vertices_m.len()],
             vertex_cr: vec![0.0; rock.vertices_m.len()],
+            edge_touch: Vec::new(),
             brake_left_s: 0.0,
             roll_normal: Vector3::z(),
             touch_drag_per_s: 0.0,
@@ -436,6 +440,7 @@ impl<'a> Run<'a> {
         // A flight ends any contact (a rock is clear of the ground only steps after its last touch, so with the
         // default contact duration nothing counts as touching here already).
         self.touch_left.fill(0);
+        self.edge_touch.clear();
         self.brake_left_s = 0.0;
         let (x0, v0) = (self.s.position_m, self.s.velocity_mps);
         let horizontal = (v0.x * v0.x + v0.y * v0.y).sqrt() * h;
@@ -553,6 +558,10 @@ impl<'a> Run<'a> {
         for t in self.touch_left.iter_mut() {
             *t = t.saturating_sub(1);
         }
+        self.edge_touch.retain_mut(|e| {
+            e.2 -= 1;
+            e.2 > 0
+        });
         in_contact
     }
 
@@ -575,21 +584,34 @@ impl<'a> Run<'a> {
         }
     }
 
-    /// Whether a hull vertex that does not count as touching lies below the ground at the end pose of a free step
-    /// of `h` and approaches it (along the untilted normal) faster than the bounce threshold. The end pose, not
-    /// the midpoint one the step detects contacts at: a vertex that crosses the ground in the step's second half
-    /// would otherwise be met below it by the next step, and resolved late.
-    fn impact_ahead(&self, h: f64) -> bool {
+    /// Whether a hull vertex (or, with `terrain_edge_contacts`, a terrain edge) that does not count as touching
+    /// lies below the ground (inside the rock) at the end pose of a free step of `h` and approaches it (along the
+    /// untilted normal) faster than the bounce threshold. The end pose, not the midpoint one the step detects
+    /// contacts at: a vertex that crosses the ground in the step's second half would otherwise be met below it by
+    /// the next step, and resolved late.
+    fn impact_ahead(&mut self, h: f64) -> bool {
         let x = self.s.position_m + self.s.velocity_mps * h;
         let Some(top) = self.ground_top_under(&x) else { return false };
         let rot = rotate(&self.s.orientation, &self.s.omega_body_radps, h).to_rotation_matrix();
-        let w = self.s.orientation * self.s.omega_body_radps;
-        self.rock.vertices_m.iter().enumerate().any(|(i, b)| {
+        let (v, w) = (self.s.velocity_mps, self.s.orientation * self.s.omega_body_radps);
+        let approaches = |arm: Vector3<f64>, normal: Vector3<f64>| {
+            -(v + w.cross(&arm)).dot(&normal) > self.params.bounce_threshold_mps
+        };
+        let vertex_impact = self.rock.vertices_m.iter().enumerate().any(|(i, b)| {
             let arm = rot * b;
             self.touch_left[i] == 0
-                && self.vertex_penetration(&(x + arm), top).is_some_and(|(_, normal, _)| {
-                    -(self.s.velocity_mps + w.cross(&arm)).dot(&normal) > self.params.bounce_threshold_mps
-                })
+                && self.vertex_penetration(&(x + arm), top).is_some_and(|(_, normal, _)| approaches(arm, normal))
+        });
+        if vertex_impact || !self.params.terrain_edge_contacts {
+            return vertex_impact;
+        }
+        self.list_edges(&x);
+        let lowest = x.z + self.rock.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min);
+        self.edges.iter().any(|&(ia, ib, triangle)| {
+            self.touching(self.edge_index(ia, ib, 0), triangle).is_none()
+                && self
+                    .edge_inside(&x, &rot, lowest, (ia, ib))
+                    .is_some_and(|e| approaches(rot * e.deepest, -(rot * e.outward)))
         })
     }
 
@@ -668,12 +690,19 @@ impl<'a> Run<'a> {
                 });
             }
         }
-        // Hull vertices only (a terrain edge's contact has an index past them).
+        // A terrain edge's contact has an index past the hull vertices.
         let hull_vertices = self.touch_left.len();
-        for c in self.contacts.iter().filter(|c| c.vertex < hull_vertices) {
-            // One more than the contact's steps: `contact_step` takes one off at the end of the step.
-            self.touch_left[c.vertex] = self.touch_steps + 1;
-            self.vertex_cr[c.vertex] = c.cr_drawn;
+        // One more than the contact's steps: `contact_step` takes one off at the end of the step.
+        let left = self.touch_steps + 1;
+        for c in &self.contacts {
+            if c.vertex < hull_vertices {
+                self.touch_left[c.vertex] = left;
+                self.vertex_cr[c.vertex] = c.cr_drawn;
+            } else if let Some(e) = self.edge_touch.iter_mut().find(|e| (e.0, e.1) == (c.vertex, c.triangle)) {
+                e.2 = left;
+            } else {
+                self.edge_touch.push((c.vertex, c.triangle, left, c.cr_drawn));
+            }
         }
         if in_contact {
             let drag = self
@@ -784,14 +813,9 @@ impl<'a> Run<'a> {
             let Some((depth, mut normal, triangle)) = self.vertex_penetration(&p, top) else { continue };
             let m = self.terrain.triangle_material[triangle as usize] as usize;
             let (mu_static, mu_dynamic) = self.friction_of(m);
-            let new = self.touch_left[i] == 0;
-            let mut cr = if !new {
-                self.vertex_cr[i]
-            } else if self.params.cr_draw == CrDraw::PerImpact {
-                self.terrain.materials[m].cr.sample(self.rng)
-            } else {
-                self.cr[m]
-            };
+            let touching = self.touching(i, triangle);
+            let new = touching.is_none();
+            let mut cr = self.cr_at(touching, m);
             let cr_drawn = cr;
             if new {
                 if let Some(rough) = effects.roughness_m {
@@ -837,59 +861,103 @@ impl<'a> Run<'a> {
         (mu_static.max(mu_dynamic), mu_dynamic)
     }
 
+    /// The restitution drawn at the last touch of a contact that still counts as touching: hull vertex `vertex`, or
+    /// a terrain edge's contact (an index past the hull vertices) on `triangle`.
+    fn touching(&self, vertex: usize, triangle: u32) -> Option<f64> {
+        match self.touch_left.get(vertex) {
+            Some(&left) => (left > 0).then(|| self.vertex_cr[vertex]),
+            None => self.edge_touch.iter().find(|e| (e.0, e.1) == (vertex, triangle)).map(|e| e.3),
+        }
+    }
+
+    /// The restitution of a contact on material `m`: kept while it counts as touching, else drawn anew when drawn
+    /// per impact, else the rock's draw.
+    fn cr_at(&mut self, touching: Option<f64>, m: usize) -> f64 {
+        match touching {
+            Some(cr) => cr,
+            None if self.params.cr_draw == CrDraw::PerImpact => self.terrain.materials[m].cr.sample(self.rng),
+            None => self.cr[m],
+        }
+    }
+
+    /// The contact index of end `k` (0 or 1) of the terrain edge between vertices `ia` and `ib`: one of its own,
+    /// past the hull's vertices.
+    fn edge_index(&self, ia: u32, ib: u32, k: usize) -> usize {
+        let edge = ia as usize * self.terrain.surface.vertices().len() + ib as usize;
+        self.rock.vertices_m.len() + 2 * edge + k
+    }
+
+    /// Lists the terrain edges within twice the bounding radius of `x` in `edges`, unless they were listed within a
+    /// radius of it.
+    fn list_edges(&mut self, x: &Vector3<f64>) {
+        let r = self.rock.bounding_radius_m;
+        if self.edges_listed_at.is_none_or(|c| (c.x - x.x).abs().max((c.y - x.y).abs()) > r) {
+            self.terrain.surface.edges_in(x.x - 2.0 * r, x.x + 2.0 * r, x.y - 2.0 * r, x.y + 2.0 * r, &mut self.edges);
+            self.edges_listed_at = Some(*x);
+        }
+    }
+
+    /// Where the terrain edge between vertices `ia` and `ib` passes more than half `penetration_slop_m` inside the
+    /// rock at the pose (x, rot), whose lowest point is at height `lowest` ([`deepest_inside`], in the body frame). Met at half the slop (ours): the depth is projected out
+    /// beyond the slop, so a rock held by edges alone rests between the two; met at the slop itself, it was pushed
+    /// clear every few steps, fell a step, and never counted as at rest (a 660 t slab on a flat top's edges).
+    fn edge_inside(
+        &self,
+        x: &Vector3<f64>,
+        rot: &nalgebra::Rotation3<f64>,
+        lowest: f64,
+        (ia, ib): (u32, u32),
+    ) -> Option<EdgeInside> {
+        let vertices = self.terrain.surface.vertices();
+        let (ea, eb) = (vertices[ia as usize], vertices[ib as usize]);
+        // An edge wholly below the rock's lowest point, or beyond its bounding sphere, cannot meet it.
+        if (ea.z < lowest && eb.z < lowest) || segment_distance(&ea, &eb, x) > self.rock.bounding_radius_m {
+            return None;
+        }
+        let to_body = |p: Vector3<f64>| rot.inverse_transform_vector(&(p - x));
+        deepest_inside(&self.rock.faces, &to_body(ea), &to_body(eb), 0.5 * self.params.penetration_slop_m)
+    }
+
     /// Adds the terrain edges that pass through the rock at the pose (x, rot) more than half `penetration_slop_m`
     /// deep as contacts ([`SimParams::terrain_edge_contacts`]): at the edge's deepest point, with the normal of the
     /// hull face nearest to it or of the hull edge it meets there ([`deepest_inside`]), pointing into the rock; the
-    /// restitution is the rock's draw for the edge's material
-    /// (no roughness tilt; not counted as an impact). Edges meeting at a buried terrain vertex give it once.
+    /// restitution is drawn as a hull vertex's is (kept while the edge counts as touching), but with no roughness
+    /// tilt. Edges meeting at a buried terrain vertex give it once.
     fn detect_edges(&mut self, x: &Vector3<f64>, rot: &nalgebra::Rotation3<f64>) {
         let rock = self.rock;
-        let r = rock.bounding_radius_m;
-        let mut edges = std::mem::take(&mut self.edges);
-        if self.edges_listed_at.is_none_or(|c| (c.x - x.x).abs().max((c.y - x.y).abs()) > r) {
-            self.terrain.surface.edges_in(x.x - 2.0 * r, x.x + 2.0 * r, x.y - 2.0 * r, x.y + 2.0 * r, &mut edges);
-            self.edges_listed_at = Some(*x);
-        }
-        let vertices = self.terrain.surface.vertices();
+        self.list_edges(x);
+        let edges = std::mem::take(&mut self.edges);
         let first_edge_contact = self.contacts.len();
-        let effects = &self.params.effects;
         let (v, w) = (self.s.velocity_mps, self.s.orientation * self.s.omega_body_radps);
-        // The rock's lowest point: an edge wholly below it cannot meet the rock.
         let lowest = x.z + rock.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min);
-        // Met at half the slop (ours): the depth is projected out beyond the slop, so a rock held by edges alone
-        // rests between the two; met at the slop itself, it was pushed clear every few steps, fell a step, and
-        // never counted as at rest (a 660 t slab lying on the edges of a crest ran to `max_time_s`).
-        let meet_m = 0.5 * self.params.penetration_slop_m;
         for &(ia, ib, triangle) in &edges {
-            let (ea, eb) = (vertices[ia as usize], vertices[ib as usize]);
-            if (ea.z < lowest && eb.z < lowest) || segment_distance(&ea, &eb, x) > r {
-                continue;
-            }
-            let to_body = |k: u32| rot.inverse_transform_vector(&(vertices[k as usize] - x));
-            let Some((arm, depth, outward)) = deepest_inside(&rock.faces, &to_body(ia), &to_body(ib), meet_m) else {
-                continue;
-            };
-            if self.contacts[first_edge_contact..].iter().any(|c| (c.arm_body_m - arm).norm() < 1e-6) {
-                continue;
-            }
-            let normal = -(rot * outward);
+            let Some(inside) = self.edge_inside(x, rot, lowest, (ia, ib)) else { continue };
+            let normal = -(rot * inside.outward);
             let m = self.terrain.triangle_material[triangle as usize] as usize;
             let (mu_static, mu_dynamic) = self.friction_of(m);
-            let approach = (-(v + w.cross(&(rot * arm))).dot(&normal)).max(0.0);
-            let angle = incidence_deg(&v, &normal);
-            self.contacts.push(Contact {
-                vertex: rock.vertices_m.len() + ia as usize,
-                point_m: x + rot * arm,
-                arm_body_m: arm,
-                normal,
-                depth_m: depth,
-                warm: (0.0, [0.0; 2]),
-                triangle,
-                cr: effects.restitution(self.cr[m], approach, angle, rock.mass_kg),
-                cr_drawn: self.cr[m],
-                mu_static,
-                mu_dynamic,
-            });
+            // One restitution for the edge's contacts.
+            let touching = (0..2).find_map(|k| self.touching(self.edge_index(ia, ib, k), triangle));
+            let cr_drawn = self.cr_at(touching, m);
+            for (k, &(arm, depth)) in inside.stretch.iter().enumerate() {
+                if self.contacts[first_edge_contact..].iter().any(|c| (c.arm_body_m - arm).norm() < 1e-6) {
+                    continue;
+                }
+                let approach = (-(v + w.cross(&(rot * arm))).dot(&normal)).max(0.0);
+                let angle = incidence_deg(&v, &normal);
+                self.contacts.push(Contact {
+                    vertex: self.edge_index(ia, ib, k),
+                    point_m: x + rot * arm,
+                    arm_body_m: arm,
+                    normal,
+                    depth_m: depth,
+                    warm: (0.0, [0.0; 2]),
+                    triangle,
+                    cr: self.params.effects.restitution(cr_drawn, approach, angle, rock.mass_kg),
+                    cr_drawn,
+                    mu_static,
+                    mu_dynamic,
+                });
+            }
         }
         self.edges = edges;
     }
@@ -898,9 +966,8 @@ impl<'a> Run<'a> {
     /// threshold, if any.
     fn new_impact(&self, before: &Velocities, q: &UnitQuaternion<f64>) -> Option<Contact> {
         let mut best: Option<(f64, Contact)> = None;
-        // Hull vertices only: a terrain edge's contact is not counted as an impact.
-        for c in self.contacts.iter().filter(|c| c.vertex < self.touch_left.len()) {
-            if self.touch_left[c.vertex] > 0 {
+        for c in &self.contacts {
+            if self.touching(c.vertex, c.triangle).is_some() {
                 continue;
             }
             let b = c.arm_body_m;
@@ -965,10 +1032,27 @@ fn segment_distance(a: &Vector3<f64>, b: &Vector3<f64>, p: &Vector3<f64>) -> f64
     (a + ab * t - p).norm()
 }
 
+/// Where a terrain edge passes inside the rock ([`deepest_inside`]), in the body frame.
+struct EdgeInside {
+    /// The edge's deepest point inside the hull.
+    deepest: Vector3<f64>,
+    /// The outward normal of the contact at the deepest point.
+    outward: Vector3<f64>,
+    /// The contact points with their depths (the distance to the nearest face plane), m: the ends of the stretch
+    /// within the least depth asked for of the deepest, or the deepest point alone where that stretch is shorter
+    /// than [`MIN_EDGE_STRETCH_M`].
+    stretch: Vec<(Vector3<f64>, f64)>,
+}
+
+/// Shortest stretch of a terrain edge taken as two contacts rather than one, m (ours: a centimetre, under the
+/// smallest rock side allowed, 5 cm).
+const MIN_EDGE_STRETCH_M: f64 = 0.01;
+
 /// The deepest point of the segment a–b (body frame) inside the convex hull whose outward face planes are `faces`
-/// (n·x ≤ d inside), its depth (the distance to the nearest face plane) and the outward normal of the contact there
-/// (the nearest face's, or for two faces as near, that of the hull's edge between them against the segment);
-/// `None` if the segment misses the hull or lies nowhere deeper than `min_depth`.
+/// (n·x ≤ d inside), its depth (the distance to the nearest face plane), the outward normal of the contact there
+/// (the nearest face's, or for two faces as near, that of the hull's edge between them against the segment) and
+/// the stretch of the segment within `min_depth` of that depth; `None` if the segment misses the hull or lies
+/// nowhere deeper than `min_depth`.
 /// The segment is clipped to the hull's half-spaces, and the depth, a concave function along it (the minimum of linear
 /// ones), is maximised by golden-section search to 10⁻⁸ of the segment's length.
 fn deepest_inside(
@@ -976,7 +1060,7 @@ fn deepest_inside(
     a: &Vector3<f64>,
     b: &Vector3<f64>,
     min_depth: f64,
-) -> Option<(Vector3<f64>, f64, Vector3<f64>)> {
+) -> Option<EdgeInside> {
     let (mut t0, mut t1) = (0.0f64, 1.0f64);
     for (n, d) in faces {
         let (da, db) = (d - n.dot(a), d - n.dot(b));
@@ -1023,6 +1107,32 @@ fn deepest_inside(
     if depth <= min_depth {
         return None;
     }
+    // The stretch within `min_depth` of the deepest (ours; depth is concave along the segment, so it is one
+    // interval, its ends found by bisection): a terrain edge lying along a face meets it along a line, which two
+    // contacts at the stretch's ends carry as two hull vertices carry an edge of the rock. The deepest point alone
+    // is, on such a plateau, wherever the search stopped on it, and a cube dropped flat on a crest spun off it.
+    let floor = depth - min_depth.max(1e-6);
+    let end_towards = |mut outside: f64| {
+        if depth_at(outside).0 >= floor {
+            return outside;
+        }
+        let mut inside = t;
+        for _ in 0..40 {
+            let mid = 0.5 * (inside + outside);
+            if depth_at(mid).0 >= floor {
+                inside = mid;
+            } else {
+                outside = mid;
+            }
+        }
+        inside
+    };
+    let (t_lo, t_hi) = (end_towards(t0), end_towards(t1));
+    let stretch = if (t_hi - t_lo) * (b - a).norm() < MIN_EDGE_STRETCH_M {
+        vec![(p, depth)]
+    } else {
+        [t_lo, t_hi].iter().map(|&u| (a + (b - a) * u, depth_at(u).0)).collect()
+    };
     // Where two faces are as near, the segment meets the hull's edge between them: the normal of that edge-edge
     // contact is perpendicular to both edges (as in the separating-axis test), which for a segment lying along one
     // of the faces is that face's normal (a terrain edge under a flat face is pressed against that face). Taking
@@ -1035,7 +1145,7 @@ fn deepest_inside(
     let n1 = near.first()?.1;
     // The next nearest face that meets the first in an edge (not one parallel to it, as across a thin slab).
     let Some(n2) = near[1..].iter().map(|f| f.1).find(|n| n1.cross(n).norm() > 1e-6) else {
-        return Some((p, depth, *n1));
+        return Some(EdgeInside { deepest: p, outward: *n1, stretch });
     };
     let hull_edge = n1.cross(n2).normalize();
     let across = (b - a).normalize().cross(&hull_edge);
@@ -1049,7 +1159,7 @@ fn deepest_inside(
     } else {
         (n1 + n2).normalize()
     };
-    Some((p, depth, outward))
+    Some(EdgeInside { deepest: p, outward, stretch })
 }
 
 #[cfg(test)]
@@ -1065,30 +1175,42 @@ mod tests {
     fn a_segment_is_met_at_its_deepest_point_inside_the_hull() {
         let faces = cube_faces();
         // Through the middle along x: deepest at the centre, 1 from every face but ±x.
-        let (p, depth, outward) =
-            deepest_inside(&faces, &Vector3::new(-3.0, 0.0, 0.0), &Vector3::new(3.0, 0.0, 0.0), 0.0).unwrap();
+        let deepest = |a: Vector3<f64>, b: Vector3<f64>| {
+            let e = deepest_inside(&faces, &a, &b, 0.0).unwrap();
+            assert_eq!(e.stretch.len(), 1, "a segment peaking once is met at one point");
+            (e.deepest, e.stretch[0].1, e.outward)
+        };
+        let (p, depth, outward) = deepest(Vector3::new(-3.0, 0.0, 0.0), Vector3::new(3.0, 0.0, 0.0));
         assert!(p.norm() < 1e-6 && (depth - 1.0).abs() < 1e-7, "{p} {depth}");
         assert!(outward.x == 0.0, "the face met is one the segment lies along, not ±x: {outward}");
         // Along the bottom face, 0.1 inside at x = 0 and rising 1 in 60: deepest where it meets the +x face as deep,
         // x = 0.9 / (1 + 1/60), on the cube's edge between the two faces: the normal is perpendicular to both edges,
         // (1/60, 0, −1), nearly the bottom face's, which the segment nearly lies along.
         let (a, b) = (Vector3::new(-3.0, 0.2, -0.95), Vector3::new(3.0, 0.2, -0.85));
-        let (p, depth, outward) = deepest_inside(&faces, &a, &b, 0.0).unwrap();
+        let (p, depth, outward) = deepest(a, b);
         assert!((outward - Vector3::new(1.0 / 60.0, 0.0, -1.0).normalize()).norm() < 1e-9, "{outward}");
         let x = 0.9 / (1.0 + 1.0 / 60.0);
         assert!((p.x - x).abs() < 1e-6 && (depth - (1.0 - x)).abs() < 1e-6, "{p} {depth}");
         // Through a corner region only: the edge leaves across the rim of x = 1 and z = −1, and the cube's edge there
         // (along y) crosses it square: the normal bisects the two faces'.
         let (a, b) = (Vector3::new(0.0, 0.0, -1.5), Vector3::new(1.5, 0.0, 0.0));
-        let (p, depth, outward) = deepest_inside(&faces, &a, &b, 0.0).unwrap();
+        let (p, depth, outward) = deepest(a, b);
         assert!((depth - 0.25).abs() < 1e-6 && (p - Vector3::new(0.75, 0.0, -0.75)).norm() < 1e-5, "{p} {depth}");
         assert!((outward - Vector3::new(1.0, 0.0, -1.0).normalize()).norm() < 1e-9, "{outward}");
         // Across the same rim at a slant (rising along y too): perpendicular to the segment and to the cube's edge.
         let (a, b) = (Vector3::new(0.0, -0.5, -1.5), Vector3::new(1.5, 0.5, 0.0));
-        let (_, _, outward) = deepest_inside(&faces, &a, &b, 0.0).unwrap();
+        let (_, _, outward) = deepest(a, b);
         let expected = (b - a).cross(&Vector3::y()).normalize();
         assert!((outward - expected).norm() < 1e-9 || (outward + expected).norm() < 1e-9, "{outward}");
         assert!(outward.x > 0.0 && outward.z < 0.0, "{outward}");
+        // Along the bottom face, 0.1 inside: met along it, by contacts at the ends of the stretch within the least
+        // depth asked for (1 mm) of the deepest, where the ±x faces are 0.099 away.
+        let e = deepest_inside(&faces, &Vector3::new(-3.0, 0.2, -0.9), &Vector3::new(3.0, 0.2, -0.9), 0.001).unwrap();
+        assert!((e.outward + Vector3::z()).norm() < 1e-9, "{}", e.outward);
+        assert_eq!(e.stretch.len(), 2);
+        for ((p, depth), x) in e.stretch.iter().zip([-0.901, 0.901]) {
+            assert!((p.x - x).abs() < 1e-6 && (depth - 0.099).abs() < 1e-6, "{p} {depth}");
+        }
         // Nowhere deeper than asked: the segment above is at most 0.25 inside.
         assert!(deepest_inside(&faces, &a, &b, 0.26).is_none() && deepest_inside(&faces, &a, &b, 0.24).is_some());
         // Missing the cube, and touching nothing but a plane beyond it.
