@@ -293,13 +293,19 @@ fn section_material_names_that_would_break_the_csv_are_refused() {
     assert!(csv.lines().skip(1).all(|l| l.split(',').count() == 3 && l.ends_with(",rock_1")), "{csv}");
 }
 
-/// Values that made a run never finish (a step of 10⁻¹² s, a release at 10³⁰ m/s, 4·10⁹ solver sweeps a step) or
+/// Values that made a run never finish (a step of 10⁻¹² s, a release at 10³⁰ m/s, 4·10⁹ solver sweeps a step), or
+/// crawl (a contact travel of 10⁻⁹ m: a thousand sub-steps a step), or
 /// end in nonsense (a 10⁻³⁰⁰ kg block left the terrain with NaN end points; a 1 g block gained kilojoules at
 /// impacts; a 10⁵ m cube weighed 10¹⁸ kg past the mass limit; a spin of 10¹² rad/s) are refused by name.
 #[test]
 fn engine_settings_and_releases_that_never_finish_or_end_in_nonsense_are_refused() {
-    let cases: [(&str, &str, &[&str]); 11] = [
+    let cases: [(&str, &str, &[&str]); 12] = [
         ("seed = 1", "seed = 1\ndt_s = 1e-12", &["simulation.dt_s", "below the smallest step, 0.0001 s"]),
+        (
+            "seed = 1",
+            "seed = 1\nmax_contact_travel_m = 1e-9",
+            &["simulation.max_contact_travel_m", "below the shortest travel, 0.01 m"],
+        ),
         ("seed = 1", "seed = 1\nmax_time_s = 1e9", &["simulation.max_time_s", "longer than any rockfall"]),
         ("seed = 1", "seed = 1\nsolver_iterations = 4000000000", &["simulation.solver_iterations", "1 to 10000"]),
         ("height_m = 0.1", "height_m = 1e30", &["sources[0].height_m", "0 to 1000 m"]),

@@ -157,26 +157,31 @@ impl SimParams {
         };
         pos("dt_s", self.dt_s, "use a step of 0.0005 to 0.002 s")?;
         at_most("dt_s", self.dt_s, 0.01, "is too coarse for contact", "use 0.0005 to 0.002 s")?;
-        if self.dt_s < MIN_DT_S {
-            return Err(Error::invalid(
-                format!("{prefix}dt_s"),
-                format!("{} s is below the smallest step, {MIN_DT_S} s", crate::error::number_text(self.dt_s)),
-                "use 0.0005 to 0.002 s (results converge by 0.00025 s; a finer step only makes a run take hours)",
-            ));
-        }
+        let at_least = |name: &str, v: f64, min: f64, unit: &str, what: &str, hint: &str| {
+            if v < min {
+                let got = crate::error::number_text(v);
+                Err(Error::invalid(
+                    format!("{prefix}{name}"),
+                    format!("{got} {unit} is below {what}, {min} {unit}"),
+                    hint,
+                ))
+            } else {
+                Ok(())
+            }
+        };
+        let hint = "use 0.0005 to 0.002 s (results converge by 0.00025 s; a finer step only makes a run take hours)";
+        at_least("dt_s", self.dt_s, MIN_DT_S, "s", "the smallest step", hint)?;
         pos("max_flight_step_s", self.max_flight_step_s, "use about 0.25 s")?;
         let hint = "use 0.2 m, the default, or less than half the thinnest wall or fin in the terrain";
         pos("max_contact_travel_m", self.max_contact_travel_m, hint)?;
-        if self.max_contact_travel_m < MIN_CONTACT_TRAVEL_M {
-            return Err(Error::invalid(
-                format!("{prefix}max_contact_travel_m"),
-                format!(
-                    "{} m is below the shortest travel, {MIN_CONTACT_TRAVEL_M} m",
-                    crate::error::number_text(self.max_contact_travel_m)
-                ),
-                hint,
-            ));
-        }
+        at_least(
+            "max_contact_travel_m",
+            self.max_contact_travel_m,
+            MIN_CONTACT_TRAVEL_M,
+            "m",
+            "the shortest travel",
+            hint,
+        )?;
         pos("contact_duration_s", self.contact_duration_s, "use 0.002 s, the default")?;
         let hint = "use 0.002 s, the default (impacts of rocks on soil last milliseconds)";
         at_most("contact_duration_s", self.contact_duration_s, 0.1, "is longer than a rock's impact lasts", hint)?;
@@ -187,16 +192,8 @@ impl SimParams {
         pos("stop_spin_radps", self.stop_spin_radps, "use about 0.2 rad/s")?;
         pos("stop_duration_s", self.stop_duration_s, "use about 0.5 s")?;
         pos("sample_spacing_m", self.sample_spacing_m, "use half the raster cell size or less")?;
-        if self.sample_spacing_m < MIN_SAMPLE_SPACING_M {
-            return Err(Error::invalid(
-                format!("{prefix}sample_spacing_m"),
-                format!(
-                    "{} m is below the smallest spacing, {MIN_SAMPLE_SPACING_M} m",
-                    crate::error::number_text(self.sample_spacing_m)
-                ),
-                format!("use {MIN_SAMPLE_SPACING_M} m or more (half the raster cell size is enough)"),
-            ));
-        }
+        let hint = format!("use {MIN_SAMPLE_SPACING_M} m or more (half the raster cell size is enough)");
+        at_least("sample_spacing_m", self.sample_spacing_m, MIN_SAMPLE_SPACING_M, "m", "the smallest spacing", &hint)?;
         for (name, v) in
             [("bounce_threshold_mps", self.bounce_threshold_mps), ("penetration_slop_m", self.penetration_slop_m)]
         {
