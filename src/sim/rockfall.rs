@@ -608,10 +608,9 @@ impl<'a> Run<'a> {
         self.list_edges(&x);
         let lowest = x.z + self.rock.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min);
         self.edges.iter().any(|&(ia, ib, triangle)| {
-            self.touching(self.edge_index(ia, ib, 0), triangle).is_none()
-                && self
-                    .edge_inside(&x, &rot, lowest, (ia, ib))
-                    .is_some_and(|e| approaches(rot * e.deepest, -(rot * e.outward)))
+            self.edge_inside(&x, &rot, lowest, (ia, ib))
+                .is_some_and(|e| approaches(rot * e.deepest, -(rot * e.outward)))
+                && self.touching(self.edge_index(ia, ib, 0), triangle).is_none()
         })
     }
 
@@ -898,9 +897,10 @@ impl<'a> Run<'a> {
     }
 
     /// Where the terrain edge between vertices `ia` and `ib` passes more than half `penetration_slop_m` inside the
-    /// rock at the pose (x, rot), whose lowest point is at height `lowest` ([`deepest_inside`], in the body frame). Met at half the slop (ours): the depth is projected out
-    /// beyond the slop, so a rock held by edges alone rests between the two; met at the slop itself, it was pushed
-    /// clear every few steps, fell a step, and never counted as at rest (a 660 t slab on a flat top's edges).
+    /// rock at the pose (x, rot), whose lowest point is at height `lowest` ([`deepest_inside`], in the body frame).
+    /// Met at half the slop (ours): the depth is projected out beyond the slop, so a rock held by edges alone rests
+    /// between the two; met at the slop itself, it was pushed clear every few steps, fell a step, and never counted
+    /// as at rest (a 660 t slab on a flat top's edges).
     fn edge_inside(
         &self,
         x: &Vector3<f64>,
