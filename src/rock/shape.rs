@@ -248,6 +248,11 @@ impl RockBody {
     pub fn equivalent_radius_m(&self) -> f64 {
         (3.0 * self.volume_m3 / (4.0 * std::f64::consts::PI)).cbrt()
     }
+
+    /// Height of the lowest hull vertex relative to the centre of mass in the orientation `rot`, m (negative).
+    pub fn lowest_dz_m(&self, rot: &nalgebra::Rotation3<f64>) -> f64 {
+        self.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min)
+    }
 }
 
 fn bbox(points: &[Point3<f64>]) -> (Vector3<f64>, Vector3<f64>) {

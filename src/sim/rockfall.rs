@@ -516,7 +516,7 @@ impl<'a> Run<'a> {
         self.barrier_met[k] = true;
         let point = from + (to - from) * f;
         let rot = self.s.orientation.to_rotation_matrix();
-        let lowest = self.rock.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min);
+        let lowest = self.rock.lowest_dz_m(&rot);
         let ground = self.terrain.surface.height(point.x, point.y).unwrap_or(point.z);
         let clearance = (point.z + lowest - ground).max(0.0);
         let barrier = &self.terrain.barriers[k];
@@ -606,11 +606,11 @@ impl<'a> Run<'a> {
             return vertex_impact;
         }
         self.list_edges(&x);
-        let lowest = x.z + self.rock.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min);
+        let lowest = x.z + self.rock.lowest_dz_m(&rot);
         self.edges.iter().any(|&(ia, ib, triangle)| {
             self.edge_inside(&x, &rot, lowest, (ia, ib))
                 .is_some_and(|e| approaches(rot * e.deepest, -(rot * e.outward)))
-                && self.touching(self.edge_index(ia, ib, 0), triangle).is_none()
+                && self.edge_touching(ia, ib, triangle).is_none()
         })
     }
 
@@ -879,6 +879,12 @@ impl<'a> Run<'a> {
         }
     }
 
+    /// The restitution drawn at the last touch of the terrain edge between vertices `ia` and `ib` (on `triangle`)
+    /// if either of its contacts still counts as touching: one restitution for both.
+    fn edge_touching(&self, ia: u32, ib: u32, triangle: u32) -> Option<f64> {
+        (0..2).find_map(|k| self.touching(self.edge_index(ia, ib, k), triangle))
+    }
+
     /// The contact index of end `k` (0 or 1) of the terrain edge between vertices `ia` and `ib`: one of its own,
     /// past the hull's vertices.
     fn edge_index(&self, ia: u32, ib: u32, k: usize) -> usize {
@@ -929,21 +935,19 @@ impl<'a> Run<'a> {
         let edges = std::mem::take(&mut self.edges);
         let first_edge_contact = self.contacts.len();
         let (v, w) = (self.s.velocity_mps, self.s.orientation * self.s.omega_body_radps);
-        let lowest = x.z + rock.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min);
+        let lowest = x.z + rock.lowest_dz_m(rot);
         for &(ia, ib, triangle) in &edges {
             let Some(inside) = self.edge_inside(x, rot, lowest, (ia, ib)) else { continue };
             let normal = -(rot * inside.outward);
+            let angle = incidence_deg(&v, &normal);
             let m = self.terrain.triangle_material[triangle as usize] as usize;
             let (mu_static, mu_dynamic) = self.friction_of(m);
-            // One restitution for the edge's contacts.
-            let touching = (0..2).find_map(|k| self.touching(self.edge_index(ia, ib, k), triangle));
-            let cr_drawn = self.cr_at(touching, m);
+            let cr_drawn = self.cr_at(self.edge_touching(ia, ib, triangle), m);
             for (k, &(arm, depth)) in inside.stretch.iter().enumerate() {
                 if self.contacts[first_edge_contact..].iter().any(|c| (c.arm_body_m - arm).norm() < 1e-6) {
                     continue;
                 }
                 let approach = (-(v + w.cross(&(rot * arm))).dot(&normal)).max(0.0);
-                let angle = incidence_deg(&v, &normal);
                 self.contacts.push(Contact {
                     vertex: self.edge_index(ia, ib, k),
                     point_m: x + rot * arm,
@@ -995,7 +999,7 @@ impl<'a> Run<'a> {
             }
         }
         let rot = self.s.orientation.to_rotation_matrix();
-        let lowest = self.rock.vertices_m.iter().map(|b| (rot * b).z).fold(f64::INFINITY, f64::min);
+        let lowest = self.rock.lowest_dz_m(&rot);
         let clearance = match self.terrain.surface.height(x.x, x.y) {
             Some(z) => (x.z + lowest - z).max(0.0),
             None => 0.0,
@@ -1083,27 +1087,26 @@ fn deepest_inside(
     }
     let depth_at = |t: f64| {
         let p = a + (b - a) * t;
-        let nearest = faces.iter().enumerate().map(|(k, (n, d))| (d - n.dot(&p), k));
-        nearest.fold((f64::INFINITY, 0), |m, x| if x.0 < m.0 { x } else { m })
+        faces.iter().map(|(n, d)| d - n.dot(&p)).fold(f64::INFINITY, f64::min)
     };
     let g = 0.5 * (5f64.sqrt() - 1.0);
     let (mut lo, mut hi) = (t0, t1);
     let (mut c, mut d) = (hi - g * (hi - lo), lo + g * (hi - lo));
-    let (mut fc, mut fd) = (depth_at(c).0, depth_at(d).0);
+    let (mut fc, mut fd) = (depth_at(c), depth_at(d));
     for _ in 0..40 {
         if fc < fd {
             (lo, c, fc) = (c, d, fd);
             d = lo + g * (hi - lo);
-            fd = depth_at(d).0;
+            fd = depth_at(d);
         } else {
             (hi, d, fd) = (d, c, fc);
             c = hi - g * (hi - lo);
-            fc = depth_at(c).0;
+            fc = depth_at(c);
         }
     }
     let t = 0.5 * (lo + hi);
     let p = a + (b - a) * t;
-    let depth = depth_at(t).0;
+    let depth = depth_at(t);
     if depth <= min_depth {
         return None;
     }
@@ -1113,13 +1116,13 @@ fn deepest_inside(
     // is, on such a plateau, wherever the search stopped on it, and a cube dropped flat on a crest spun off it.
     let floor = depth - min_depth.max(1e-6);
     let end_towards = |mut outside: f64| {
-        if depth_at(outside).0 >= floor {
+        if depth_at(outside) >= floor {
             return outside;
         }
         let mut inside = t;
         for _ in 0..40 {
             let mid = 0.5 * (inside + outside);
-            if depth_at(mid).0 >= floor {
+            if depth_at(mid) >= floor {
                 inside = mid;
             } else {
                 outside = mid;
@@ -1131,7 +1134,7 @@ fn deepest_inside(
     let stretch = if (t_hi - t_lo) * (b - a).norm() < MIN_EDGE_STRETCH_M {
         vec![(p, depth)]
     } else {
-        [t_lo, t_hi].iter().map(|&u| (a + (b - a) * u, depth_at(u).0)).collect()
+        [t_lo, t_hi].iter().map(|&u| (a + (b - a) * u, depth_at(u))).collect()
     };
     // Where two faces are as near, the segment meets the hull's edge between them: the normal of that edge-edge
     // contact is perpendicular to both edges (as in the separating-axis test), which for a segment lying along one
