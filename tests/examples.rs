@@ -86,6 +86,16 @@ fn every_shipped_example_loads_with_the_reader_of_its_command() {
         .filter_map(|&(name, kind)| load(&examples_dir().join(name), kind).err().map(|e| format!("{name}: {e}")))
         .collect();
     assert!(failures.is_empty(), "examples that no longer load:\n{}", failures.join("\n"));
+    // And each starts with a comment that gives the command running it (examples/README.md says so).
+    let no_command: Vec<&str> = EXAMPLES
+        .iter()
+        .map(|&(name, _)| name)
+        .filter(|name| {
+            let text = std::fs::read_to_string(examples_dir().join(name)).unwrap();
+            !text.lines().take_while(|l| l.starts_with('#')).any(|l| l.contains("talus ") || l.contains("cargo run"))
+        })
+        .collect();
+    assert!(no_command.is_empty(), "give the command in the first comment of: {no_command:?}");
 }
 
 #[test]

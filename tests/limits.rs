@@ -397,6 +397,25 @@ fn a_dem_too_large_to_triangulate_and_terrain_triangles_far_apart_are_refused() 
     std::fs::write(dir.path().join("far.obj"), far).unwrap();
     scenario(&format!("\"{}\", \"far.obj\"", mesh.display().to_string().replace('\\', "/")));
     refused(&["run", "scenario.toml", "--out", "out"], dir.path(), &["terrain.files", "lie far apart", "same CRS"]);
+    // The stack's mesh exported y-up and read z-up: on its side, its triangles seen edge-on; the error names `up`.
+    let y_up: String = std::fs::read_to_string(&mesh)
+        .unwrap()
+        .lines()
+        .map(|l| match l.strip_prefix("v ") {
+            Some(v) => {
+                let c: Vec<&str> = v.split_whitespace().collect();
+                format!("v {} {} -{}\n", c[0], c[2], c[1])
+            }
+            None => format!("{l}\n"),
+        })
+        .collect();
+    std::fs::write(dir.path().join("y_up.obj"), y_up).unwrap();
+    scenario("\"y_up.obj\"");
+    refused(
+        &["run", "scenario.toml", "--out", "out"],
+        dir.path(),
+        &["terrain.files", "lie far apart", "`up` in [terrain]"],
+    );
     // One file with a stray triangle 300 km away: `talus section` asked for 24 GB and more.
     let stray = std::fs::read_to_string(&mesh).unwrap() + "v 3e5 3e5 0\nv 300010 3e5 0\nv 3e5 300010 0\nf -3 -2 -1\n";
     std::fs::write(dir.path().join("stray.obj"), stray).unwrap();

@@ -469,8 +469,9 @@ pub fn check_spread(field: &str, vertices: &[Vector3<f64>], triangles: &[[u32; 3
             width_m,
             height_m
         ),
-        "check that every terrain file is in the same CRS and that no file holds vertices far from the rest \
-         (a vertex at 0, 0 in a georeferenced mesh, say)",
+        "check that `up` in [terrain] is the files' up axis (a y-up mesh read z-up stands on its side, its \
+         triangles seen edge-on from above), that every terrain file is in the same CRS and that no file holds \
+         vertices far from the rest (a vertex at 0, 0 in a georeferenced mesh, say)",
     ))
 }
 
