@@ -858,3 +858,33 @@ fn a_zone_leaves_a_rock_that_keeps_clear_of_it_as_it_was_and_stops_one_that_cros
     assert!(p.0.x > 180.0 && q.0.x < 180.0 && q.1 == StopReason::Stopped, "{p:?} against {q:?}");
     assert!(talus::terrain::point_in_polygon(q.0.x, q.0.y, &poly), "{q:?}");
 }
+
+/// A cube balanced on one corner, its body diagonal vertical, spinning about it at 60 rad/s (above the 39 rad/s a
+/// sleeping top of its shape needs to stay up; at 20 rad/s it topples after 12 s): the corner is on the
+/// axis, so its point contact feels no slip and no friction, and the top sleeps (the engine has no drilling
+/// friction over a contact patch). It stops as at rest after `stop_in_place_s` in place instead of running to the
+/// time limit; without that test it spins until `max_time_s`.
+#[test]
+fn a_cube_spinning_in_place_on_a_corner_stops_after_stop_in_place_s() {
+    let terrain = Terrain::from_function(40.0, 8, material(0.3, 40.0, 30.0), |_, _| 0.0).unwrap();
+    let r = rock(ShapeKind::Cube, 1000.0);
+    let corner = r.vertices_m.iter().min_by(|a, b| a.sum().total_cmp(&b.sum())).unwrap();
+    let q = UnitQuaternion::rotation_between(corner, &-Vector3::z()).unwrap();
+    let start = RigidState {
+        position_m: Vector3::new(20.0, 20.0, corner.norm() + 1e-4),
+        velocity_mps: Vector3::zeros(),
+        orientation: q,
+        omega_body_radps: -corner.normalize() * 60.0,
+    };
+    for (in_place_s, want) in [(10.0, StopReason::Stopped), (1000.0, StopReason::MaxTime)] {
+        let params = SimParams { max_time_s: 30.0, stop_in_place_s: in_place_s, ..Default::default() };
+        let out = simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut Record::default());
+        assert_eq!(out.stop_reason, want, "stop_in_place_s {in_place_s}");
+        let moved = (out.final_state.position_m - start.position_m).norm();
+        assert!(moved < 0.01, "the top sleeps in place: it moved {moved} m");
+        assert!(out.final_state.omega_body_radps.norm() > 59.0, "and spins on: {}", out.final_state.omega_body_radps);
+        if want == StopReason::Stopped {
+            assert!((out.travel_time_s - in_place_s).abs() < 0.1, "stopped at {} s", out.travel_time_s);
+        }
+    }
+}

@@ -60,6 +60,13 @@ pub struct SimParams {
     pub stop_spin_radps: f64,
     /// Rest test: how long both must hold, s (default: 0.5, physics.md §8).
     pub stop_duration_s: f64,
+    /// A rock in contact whose centre of mass stays this long within its bounding radius of where it was counts as
+    /// at rest, however it spins, s (default: 10, ours). A point contact feels no slip of a spin about an axis
+    /// through it, and the engine has no drilling friction over a contact patch: a cube wedged by two corners, or
+    /// balanced on one, spinning about the line through them would otherwise spin in place, or precess round its
+    /// corner, until `max_time_s` (one of the 1,000 rocks of `examples/tyrol.toml` did, at 2 rad/s for 100 s). A rock
+    /// that goes no farther than its own size in that time is going nowhere on a hazard map.
+    pub stop_in_place_s: f64,
     /// How long a touch of the ground counts as contact, s (default: 0.002, ours). The solver resolves a touch in
     /// one step, so without a duration what acts in contact (rolling resistance, the drags, the slippage of
     /// `slip_friction_max_deg`) would act for one step per impact, and a vertex that lifts off for a step would
@@ -124,6 +131,7 @@ impl Default for SimParams {
             stop_speed_mps: 0.1,
             stop_spin_radps: 0.2,
             stop_duration_s: 0.5,
+            stop_in_place_s: 10.0,
             contact_duration_s: 0.002,
             penetration_slop_m: 0.002,
             impact_substeps: 8,
@@ -191,6 +199,7 @@ impl SimParams {
         pos("stop_speed_mps", self.stop_speed_mps, "use about 0.1 m/s")?;
         pos("stop_spin_radps", self.stop_spin_radps, "use about 0.2 rad/s")?;
         pos("stop_duration_s", self.stop_duration_s, "use about 0.5 s")?;
+        pos("stop_in_place_s", self.stop_in_place_s, "use about 10 s")?;
         pos("sample_spacing_m", self.sample_spacing_m, "use half the raster cell size or less")?;
         let hint = format!("use {MIN_SAMPLE_SPACING_M} m or more (half the raster cell size is enough)");
         at_least("sample_spacing_m", self.sample_spacing_m, MIN_SAMPLE_SPACING_M, "m", "the smallest spacing", &hint)?;

@@ -370,6 +370,10 @@ impl<'a> Run<'a> {
     fn go(mut self, observer: &mut impl Observer) -> Outcome {
         let p = self.params;
         let mut rest_s = 0.0;
+        // Where and when the rock's present stay in contact within its bounding radius of one place began
+        // ([`SimParams::stop_in_place_s`]).
+        let mut in_place_since: Option<(Vector3<f64>, f64)> = None;
+        let in_place_m = self.rock.bounding_radius_m;
         let mut flight_h = p.max_flight_step_s;
         self.emit(observer, false, true);
         let reason = loop {
@@ -388,6 +392,7 @@ impl<'a> Run<'a> {
             if h >= min_flight {
                 flight_h = h;
                 rest_s = 0.0;
+                in_place_since = None;
                 if self.fly(h, observer) {
                     break StopReason::Barrier;
                 }
@@ -409,6 +414,15 @@ impl<'a> Run<'a> {
                 }
             } else {
                 rest_s = 0.0;
+            }
+            let x = self.s.position_m;
+            match in_place_since {
+                Some((anchor, since)) if in_contact && (x - anchor).norm() <= in_place_m => {
+                    if self.t - since >= p.stop_in_place_s - 1e-12 {
+                        break StopReason::Stopped;
+                    }
+                }
+                _ => in_place_since = in_contact.then_some((x, self.t)),
             }
         };
         self.emit(observer, true, true);
