@@ -253,9 +253,11 @@ struct Run<'a> {
     contacts: Vec<Contact>,
     previous: Vec<Contact>,
     scratch: Scratch,
-    /// The terrain edges within twice the bounding radius of where the rock was when they were listed
-    /// ([`SimParams::terrain_edge_contacts`]), listed again once the rock has moved a radius from there.
-    edges: Vec<(u32, u32, u32)>,
+    /// The terrain edges near where the rock was when they were listed ([`SimParams::terrain_edge_contacts`],
+    /// [`Run::list_edges`]), listed again once the rock has moved a radius from there.
+    edges: Vec<ListedEdge>,
+    /// The edges of the triangles binned near the rock, before [`Run::list_edges`] keeps those in `edges`.
+    binned_edges: Vec<(u32, u32, u32)>,
     /// Where the rock was when `edges` were listed.
     edges_listed_at: Option<Vector3<f64>>,
     last_sample: Option<(Vector3<f64>, f64)>,
@@ -355,6 +357,7 @@ impl<'a> Run<'a> {
             previous: Vec::with_capacity(16),
             scratch: Scratch::default(),
             edges: Vec::new(),
+            binned_edges: Vec::new(),
             edges_listed_at: None,
             last_sample: None,
             out,
@@ -621,10 +624,9 @@ impl<'a> Run<'a> {
         }
         self.list_edges(&x);
         let lowest = x.z + self.rock.lowest_dz_m(&rot);
-        self.edges.iter().any(|&(ia, ib, triangle)| {
-            self.edge_inside(&x, &rot, lowest, (ia, ib))
-                .is_some_and(|e| approaches(rot * e.deepest, -(rot * e.outward)))
-                && self.edge_touching(ia, ib, triangle).is_none()
+        self.edges.iter().any(|edge| {
+            self.edge_inside(&x, &rot, lowest, edge).is_some_and(|e| approaches(rot * e.deepest, -(rot * e.outward)))
+                && self.edge_touching(edge.ia, edge.ib, edge.triangle).is_none()
         })
     }
 
@@ -915,18 +917,22 @@ impl<'a> Run<'a> {
         let r = self.rock.bounding_radius_m;
         if self.edges_listed_at.is_none_or(|c| (c.x - x.x).abs().max((c.y - x.y).abs()) > r) {
             let surface = &self.terrain.surface;
-            surface.edges_in(x.x - 2.0 * r, x.x + 2.0 * r, x.y - 2.0 * r, x.y + 2.0 * r, &mut self.edges);
+            surface.edges_in(x.x - 2.0 * r, x.x + 2.0 * r, x.y - 2.0 * r, x.y + 2.0 * r, &mut self.binned_edges);
             let (vertices, reach) = (surface.vertices(), 2.5 * r);
             let flat = |v: &Vector3<f64>| Vector3::new(v.x, v.y, 0.0);
-            self.edges.retain(|&(ia, ib, _)| {
-                segment_distance(&flat(&vertices[ia as usize]), &flat(&vertices[ib as usize]), &flat(x)) <= reach
-            });
+            self.edges.clear();
+            for &(ia, ib, triangle) in &self.binned_edges {
+                let (a, b) = (vertices[ia as usize], vertices[ib as usize]);
+                if segment_distance(&flat(&a), &flat(&b), &flat(x)) <= reach {
+                    self.edges.push(ListedEdge { ia, ib, triangle, top_z: a.z.max(b.z) });
+                }
+            }
             self.edges_listed_at = Some(*x);
         }
     }
 
-    /// Where the terrain edge between vertices `ia` and `ib` passes more than half `penetration_slop_m` inside the
-    /// rock at the pose (x, rot), whose lowest point is at height `lowest` ([`deepest_inside`], in the body frame).
+    /// Where the terrain edge `edge` passes more than half `penetration_slop_m` inside the rock at the pose (x, rot),
+    /// whose lowest point is at height `lowest` ([`deepest_inside`], in the body frame).
     /// Met at half the slop (ours): the depth is projected out beyond the slop, so a rock held by edges alone rests
     /// between the two; met at the slop itself, it was pushed clear every few steps, fell a step, and never counted
     /// as at rest (a 660 t slab on a flat top's edges).
@@ -935,12 +941,15 @@ impl<'a> Run<'a> {
         x: &Vector3<f64>,
         rot: &nalgebra::Rotation3<f64>,
         lowest: f64,
-        (ia, ib): (u32, u32),
+        edge: &ListedEdge,
     ) -> Option<EdgeInside> {
-        let vertices = self.terrain.surface.vertices();
-        let (ea, eb) = (vertices[ia as usize], vertices[ib as usize]);
         // An edge wholly below the rock's lowest point, or beyond its bounding sphere, cannot meet it.
-        if (ea.z < lowest && eb.z < lowest) || segment_distance(&ea, &eb, x) > self.rock.bounding_radius_m {
+        if edge.top_z < lowest {
+            return None;
+        }
+        let vertices = self.terrain.surface.vertices();
+        let (ea, eb) = (vertices[edge.ia as usize], vertices[edge.ib as usize]);
+        if segment_distance(&ea, &eb, x) > self.rock.bounding_radius_m {
             return None;
         }
         let to_body = |p: Vector3<f64>| rot.inverse_transform_vector(&(p - x));
@@ -959,8 +968,9 @@ impl<'a> Run<'a> {
         let first_edge_contact = self.contacts.len();
         let (v, w) = (self.s.velocity_mps, self.s.orientation * self.s.omega_body_radps);
         let lowest = x.z + rock.lowest_dz_m(rot);
-        for &(ia, ib, triangle) in &edges {
-            let Some(inside) = self.edge_inside(x, rot, lowest, (ia, ib)) else { continue };
+        for edge in &edges {
+            let Some(inside) = self.edge_inside(x, rot, lowest, edge) else { continue };
+            let &ListedEdge { ia, ib, triangle, .. } = edge;
             let normal = -(rot * inside.outward);
             let angle = incidence_deg(&v, &normal);
             let m = self.terrain.triangle_material[triangle as usize] as usize;
@@ -1057,6 +1067,17 @@ fn segment_distance(a: &Vector3<f64>, b: &Vector3<f64>, p: &Vector3<f64>) -> f64
     let ab = b - a;
     let t = ((p - a).dot(&ab) / ab.norm_squared().max(1e-300)).clamp(0.0, 1.0);
     (a + ab * t - p).norm()
+}
+
+/// A terrain edge near the rock ([`Run::list_edges`]).
+struct ListedEdge {
+    /// Its lower and higher vertex indices.
+    ia: u32,
+    ib: u32,
+    /// A triangle it bounds.
+    triangle: u32,
+    /// The height of its higher end, m: an edge below the rock is turned down without reading its vertices.
+    top_z: f64,
 }
 
 /// Where a terrain edge passes inside the rock ([`deepest_inside`]), in the body frame.
