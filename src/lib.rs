@@ -5,7 +5,8 @@
 //! static and dynamic friction) or as 2D lumped masses on profiles (2DLM, RocFall semantics). Results are binned
 //! into georeferenced hazard rasters while simulating.
 //!
-//! Physics choices cite `physics.md` (shipped with the project's shared docs) or a paper, or are marked as ours.
+//! Physics choices cite `physics.md` (the project's physics notes, not in this repository; each cited section is
+//! summarised with its published sources in `docs/physics-notes.md`) or a paper, or are marked as ours.
 #![warn(missing_docs)]
 
 pub mod barrier;

@@ -104,8 +104,8 @@ impl ModelKind {
         }
     }
 
-    /// Default setting of a material parameter: free with bounds and start, or fixed (ours; bounds span the
-    /// published ranges of physics.md §3 and the seed paper's Tables 1 and 2).
+    /// Default setting of a material parameter: free with bounds and start, or fixed (ours; bounds span the seed
+    /// paper's Tables 1 and 2).
     pub fn default_parameter(self, name: &str) -> ParamSetting {
         let free = |min: f64, max: f64, start: f64| ParamSetting::Free { min, max, start: Some(start) };
         match (self, name) {
