@@ -62,6 +62,9 @@ pub struct RunSummary {
     /// they left, within [`GAP_PROBE_M`] past the teeth of its edge (nodata cells or missing triangles in their way;
     /// [`crate::terrain::Surface::resumes_ahead`]).
     pub left_over_gaps: usize,
+    /// Of the rocks that stopped, those stopped in place ([`crate::sim::SimParams::stop_in_place_s`]): their centre
+    /// stayed within their bounding radius of one place that long, in contact, as they spun or rocked.
+    pub stopped_in_place: usize,
     /// Run-out statistics over all rocks, m.
     pub runout_m: Stats,
     /// Travel time statistics, s.
@@ -388,7 +391,7 @@ pub fn run_setup(
     let mut paths: Vec<(usize, Vec<Sample>)> = Vec::new();
     let mut reasons: BTreeMap<String, usize> = StopReason::ALL.iter().map(|r| (r.as_str().to_string(), 0)).collect();
     let [mut runouts, mut times, mut energies, mut bounces] = [(); 4].map(|_| StatsAccumulator::default());
-    let (mut guards, mut contact_steps, mut sweeps) = (0u64, 0u64, 0u64);
+    let (mut guards, mut contact_steps, mut sweeps, mut in_place) = (0u64, 0u64, 0u64, 0usize);
     let mut gaps: (usize, Option<[f64; 3]>) = (0, None);
     let mut write_error = None;
     crate::parallel::map_in_order(
@@ -429,6 +432,7 @@ pub fn run_setup(
             energies.add(o.max_kinetic_j / 1000.0);
             bounces.add(o.max_bounce_m);
             guards += o.energy_guards as u64;
+            in_place += usize::from(o.stopped_in_place);
             contact_steps += o.contact_steps;
             sweeps += o.solver_sweeps;
             let r = terrain.to_file_frame(&rec.release_m);
@@ -555,6 +559,7 @@ pub fn run_setup(
         ),
         barriers: crate::collector::facts::barrier_facts(&terrain.barriers, &collector_stats),
         left_over_gaps: gaps.0,
+        stopped_in_place: in_place,
         warnings: terrain.notes.iter().cloned().chain(gaps.1.map(|at| gap_warning(gaps.0, at))).collect(),
     };
     crate::io::write_json_atomic(&out_dir.join("summary.json"), &summary)?;

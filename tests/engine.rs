@@ -885,6 +885,7 @@ fn a_cube_spinning_in_place_on_a_corner_stops_after_stop_in_place_s() {
         let params = SimParams { max_time_s: 30.0, stop_in_place_s: in_place_s, ..Default::default() };
         let out = simulate(&terrain, &r, start, &params, &mut stream(1, 0), &mut Record::default());
         assert_eq!(out.stop_reason, want, "stop_in_place_s {in_place_s}");
+        assert_eq!(out.stopped_in_place, want == StopReason::Stopped);
         let moved = (out.final_state.position_m - start.position_m).norm();
         assert!(moved < 0.01, "the top sleeps in place: it moved {moved} m");
         assert!(out.final_state.omega_body_radps.norm() > 59.0, "and spins on: {}", out.final_state.omega_body_radps);

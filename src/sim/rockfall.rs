@@ -187,6 +187,8 @@ pub struct Outcome {
     pub final_state: RigidState,
     /// Why it ended.
     pub stop_reason: StopReason,
+    /// Stopped by [`SimParams::stop_in_place_s`]: in place that long, however it spun, rather than by the rest test.
+    pub stopped_in_place: bool,
     /// Simulated time, s.
     pub travel_time_s: f64,
     /// Largest total kinetic energy, J.
@@ -319,6 +321,7 @@ impl<'a> Run<'a> {
             impacts: 0,
             contact_steps: 0,
             energy_guards: 0,
+            stopped_in_place: false,
             solver_sweeps: 0,
         };
         Run {
@@ -422,6 +425,7 @@ impl<'a> Run<'a> {
             match in_place_since {
                 Some((anchor, since)) if in_contact && (x - anchor).norm() <= in_place_m => {
                     if self.t - since >= p.stop_in_place_s - 1e-12 {
+                        self.out.stopped_in_place = true;
                         break StopReason::Stopped;
                     }
                 }
