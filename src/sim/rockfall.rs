@@ -234,9 +234,9 @@ struct Run<'a> {
     touch_left: Vec<u32>,
     /// Per hull vertex: the restitution drawn at its last touch (kept while it counts as touching).
     vertex_cr: Vec<f64>,
-    /// The terrain edges that count as touching ([`SimParams::terrain_edge_contacts`]), as the vertex contacts of
-    /// `touch_left` and `vertex_cr` do: (contact index, triangle, steps left, restitution drawn).
-    edge_touch: Vec<(usize, u32, u32, f64)>,
+    /// The terrain edges' contacts that count as touching ([`SimParams::terrain_edge_contacts`]), as the vertex
+    /// contacts of `touch_left` and `vertex_cr` do.
+    edge_touch: Vec<EdgeTouch>,
     /// How long what acts in contact still acts after the last touch, s.
     brake_left_s: f64,
     /// The averaged normal of the last touch, which rolling resistance acts against (set only when it is on).
@@ -580,8 +580,8 @@ impl<'a> Run<'a> {
             *t = t.saturating_sub(1);
         }
         self.edge_touch.retain_mut(|e| {
-            e.2 -= 1;
-            e.2 > 0
+            e.steps_left -= 1;
+            e.steps_left > 0
         });
         in_contact
     }
@@ -717,10 +717,11 @@ impl<'a> Run<'a> {
             if c.vertex < hull_vertices {
                 self.touch_left[c.vertex] = left;
                 self.vertex_cr[c.vertex] = c.cr_drawn;
-            } else if let Some(e) = self.edge_touch.iter_mut().find(|e| (e.0, e.1) == (c.vertex, c.triangle)) {
-                e.2 = left;
+            } else if let Some(e) = self.edge_touch.iter_mut().find(|e| e.is(c.vertex, c.triangle)) {
+                e.steps_left = left;
             } else {
-                self.edge_touch.push((c.vertex, c.triangle, left, c.cr_drawn));
+                let touch = EdgeTouch { index: c.vertex, triangle: c.triangle, steps_left: left, cr_drawn: c.cr_drawn };
+                self.edge_touch.push(touch);
             }
         }
         if in_contact {
@@ -885,7 +886,7 @@ impl<'a> Run<'a> {
     fn touching(&self, vertex: usize, triangle: u32) -> Option<f64> {
         match self.touch_left.get(vertex) {
             Some(&left) => (left > 0).then(|| self.vertex_cr[vertex]),
-            None => self.edge_touch.iter().find(|e| (e.0, e.1) == (vertex, triangle)).map(|e| e.3),
+            None => self.edge_touch.iter().find(|e| e.is(vertex, triangle)).map(|e| e.cr_drawn),
         }
     }
 
@@ -1071,6 +1072,24 @@ fn segment_distance(a: &Vector3<f64>, b: &Vector3<f64>, p: &Vector3<f64>) -> f64
     let ab = b - a;
     let t = ((p - a).dot(&ab) / ab.norm_squared().max(1e-300)).clamp(0.0, 1.0);
     (a + ab * t - p).norm()
+}
+
+/// A terrain edge's contact that counts as touching ([`Run::edge_touch`]).
+struct EdgeTouch {
+    /// Its contact index ([`Run::edge_index`]) and the triangle it was met on.
+    index: usize,
+    triangle: u32,
+    /// Steps it still counts as touching.
+    steps_left: u32,
+    /// The restitution drawn at its last touch.
+    cr_drawn: f64,
+}
+
+impl EdgeTouch {
+    /// Whether this is the contact `index` on `triangle`.
+    fn is(&self, index: usize, triangle: u32) -> bool {
+        (self.index, self.triangle) == (index, triangle)
+    }
 }
 
 /// A terrain edge near the rock ([`Run::list_edges`]).
