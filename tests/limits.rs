@@ -381,34 +381,27 @@ fn a_dem_too_large_to_triangulate_and_terrain_triangles_far_apart_are_refused() 
         &["big.tif", "4001 × 4001 = 16008001 cells", "16000000", "coarser cell"],
     );
     std::fs::remove_file(dir.path().join("big.tif")).unwrap();
-    // The stack's mesh and a copy of it moved 300 km east and 300 km north.
     let mesh = shipped("meshes/bench_stack/bench_stack.obj");
-    let far: String = std::fs::read_to_string(&mesh)
-        .unwrap()
-        .lines()
-        .map(|l| match l.strip_prefix("v ") {
-            Some(v) => {
-                let c: Vec<f64> = v.split_whitespace().map(|x| x.parse().unwrap()).collect();
-                format!("v {} {} {}\n", c[0] + 3e5, c[1] + 3e5, c[2])
-            }
-            None => format!("{l}\n"),
-        })
-        .collect();
-    std::fs::write(dir.path().join("far.obj"), far).unwrap();
+    // The stack's mesh with each vertex moved by `f`.
+    let moved = |f: fn([f64; 3]) -> [f64; 3]| -> String {
+        let text = std::fs::read_to_string(&mesh).unwrap();
+        text.lines()
+            .map(|l| match l.strip_prefix("v ") {
+                Some(v) => {
+                    let c: Vec<f64> = v.split_whitespace().map(|x| x.parse().unwrap()).collect();
+                    let [x, y, z] = f([c[0], c[1], c[2]]);
+                    format!("v {x} {y} {z}\n")
+                }
+                None => format!("{l}\n"),
+            })
+            .collect()
+    };
+    // The stack's mesh and a copy of it moved 300 km east and 300 km north.
+    std::fs::write(dir.path().join("far.obj"), moved(|[x, y, z]| [x + 3e5, y + 3e5, z])).unwrap();
     scenario(&format!("\"{}\", \"far.obj\"", mesh.display().to_string().replace('\\', "/")));
     refused(&["run", "scenario.toml", "--out", "out"], dir.path(), &["terrain.files", "lie far apart", "same CRS"]);
     // The stack's mesh exported y-up and read z-up: on its side, its triangles seen edge-on; the error names `up`.
-    let y_up: String = std::fs::read_to_string(&mesh)
-        .unwrap()
-        .lines()
-        .map(|l| match l.strip_prefix("v ") {
-            Some(v) => {
-                let c: Vec<&str> = v.split_whitespace().collect();
-                format!("v {} {} -{}\n", c[0], c[2], c[1])
-            }
-            None => format!("{l}\n"),
-        })
-        .collect();
+    let y_up = moved(|[x, y, z]| [x, z, -y]);
     std::fs::write(dir.path().join("y_up.obj"), y_up).unwrap();
     scenario("\"y_up.obj\"");
     refused(
