@@ -630,7 +630,7 @@ impl<'a> Run<'a> {
         let lowest = x.z + self.rock.lowest_dz_m(&rot);
         self.edges.iter().any(|edge| {
             self.edge_inside(&x, &rot, lowest, edge).is_some_and(|e| approaches(rot * e.deepest, -(rot * e.outward)))
-                && self.edge_touching(edge.ia, edge.ib, edge.triangle).is_none()
+                && self.edge_touching(edge.ia, edge.ib).is_none()
         })
     }
 
@@ -717,11 +717,10 @@ impl<'a> Run<'a> {
             if c.vertex < hull_vertices {
                 self.touch_left[c.vertex] = left;
                 self.vertex_cr[c.vertex] = c.cr_drawn;
-            } else if let Some(e) = self.edge_touch.iter_mut().find(|e| e.is(c.vertex, c.triangle)) {
+            } else if let Some(e) = self.edge_touch.iter_mut().find(|e| e.index == c.vertex) {
                 e.steps_left = left;
             } else {
-                let touch = EdgeTouch { index: c.vertex, triangle: c.triangle, steps_left: left, cr_drawn: c.cr_drawn };
-                self.edge_touch.push(touch);
+                self.edge_touch.push(EdgeTouch { index: c.vertex, steps_left: left, cr_drawn: c.cr_drawn });
             }
         }
         if in_contact {
@@ -833,7 +832,7 @@ impl<'a> Run<'a> {
             let Some((depth, mut normal, triangle)) = self.vertex_penetration(&p, top) else { continue };
             let m = self.terrain.triangle_material[triangle as usize] as usize;
             let (mu_static, mu_dynamic) = self.friction_of(m);
-            let touching = self.touching(i, triangle);
+            let touching = self.touching(i);
             let new = touching.is_none();
             let mut cr = self.cr_at(touching, m);
             let cr_drawn = cr;
@@ -882,11 +881,11 @@ impl<'a> Run<'a> {
     }
 
     /// The restitution drawn at the last touch of a contact that still counts as touching: hull vertex `vertex`, or
-    /// a terrain edge's contact (an index past the hull vertices) on `triangle`.
-    fn touching(&self, vertex: usize, triangle: u32) -> Option<f64> {
+    /// a terrain edge's contact (an index past the hull vertices), whichever triangle it was met on.
+    fn touching(&self, vertex: usize) -> Option<f64> {
         match self.touch_left.get(vertex) {
             Some(&left) => (left > 0).then(|| self.vertex_cr[vertex]),
-            None => self.edge_touch.iter().find(|e| e.is(vertex, triangle)).map(|e| e.cr_drawn),
+            None => self.edge_touch.iter().find(|e| e.index == vertex).map(|e| e.cr_drawn),
         }
     }
 
@@ -900,10 +899,10 @@ impl<'a> Run<'a> {
         }
     }
 
-    /// The restitution drawn at the last touch of the terrain edge between vertices `ia` and `ib` (on `triangle`)
-    /// if either of its contacts still counts as touching: one restitution for both.
-    fn edge_touching(&self, ia: u32, ib: u32, triangle: u32) -> Option<f64> {
-        (0..2).find_map(|k| self.touching(self.edge_index(ia, ib, k), triangle))
+    /// The restitution drawn at the last touch of the terrain edge between vertices `ia` and `ib` if either of its
+    /// contacts still counts as touching: one restitution for both.
+    fn edge_touching(&self, ia: u32, ib: u32) -> Option<f64> {
+        (0..2).find_map(|k| self.touching(self.edge_index(ia, ib, k)))
     }
 
     /// The contact index of end `k` (0 or 1) of the terrain edge between vertices `ia` and `ib`: one of its own,
@@ -980,7 +979,7 @@ impl<'a> Run<'a> {
             let angle = incidence_deg(&v, &normal);
             let m = self.terrain.triangle_material[triangle as usize] as usize;
             let (mu_static, mu_dynamic) = self.friction_of(m);
-            let cr_drawn = self.cr_at(self.edge_touching(ia, ib, triangle), m);
+            let cr_drawn = self.cr_at(self.edge_touching(ia, ib), m);
             for (k, &(arm, depth)) in inside.stretch().iter().enumerate() {
                 if self.contacts[first_edge_contact..].iter().any(|c| (c.arm_body_m - arm).norm() < 1e-6) {
                     continue;
@@ -1009,7 +1008,7 @@ impl<'a> Run<'a> {
     fn new_impact(&self, before: &Velocities, q: &UnitQuaternion<f64>) -> Option<Contact> {
         let mut best: Option<(f64, Contact)> = None;
         for c in &self.contacts {
-            if self.touching(c.vertex, c.triangle).is_some() {
+            if self.touching(c.vertex).is_some() {
                 continue;
             }
             let b = c.arm_body_m;
@@ -1076,20 +1075,12 @@ fn segment_distance(a: &Vector3<f64>, b: &Vector3<f64>, p: &Vector3<f64>) -> f64
 
 /// A terrain edge's contact that counts as touching ([`Run::edge_touch`]).
 struct EdgeTouch {
-    /// Its contact index ([`Run::edge_index`]) and the triangle it was met on.
+    /// Its contact index ([`Run::edge_index`]): the edge's, whichever of its triangles it was met on.
     index: usize,
-    triangle: u32,
     /// Steps it still counts as touching.
     steps_left: u32,
     /// The restitution drawn at its last touch.
     cr_drawn: f64,
-}
-
-impl EdgeTouch {
-    /// Whether this is the contact `index` on `triangle`.
-    fn is(&self, index: usize, triangle: u32) -> bool {
-        (self.index, self.triangle) == (index, triangle)
-    }
 }
 
 /// A terrain edge near the rock ([`Run::list_edges`]).
