@@ -6,7 +6,8 @@
 //! ```
 //! Cases: the bench stack (`examples/bench_stack.toml`), the Tyrol crop (`examples/tyrol.toml`), the same Tyrol
 //! rocks on the crop refined by bilinear interpolation to about 10^4, 10^5 and 10^6 triangles, and the calibrated
-//! Tschamut model (`examples/calibrated_tschamut.toml`: the field releases, the simulations a calibration runs).
+//! Tschamut model (`examples/calibrated_tschamut.toml`: the field releases, the simulations a calibration runs), and
+//! the bench stack again with `terrain_edge_contacts = true` (what the opt-in terrain edges cost on a mesh).
 //! Each case runs in its own process so that its peak memory (VmHWM) is its own; rocks/s is given for all cores and
 //! per core.
 
@@ -34,6 +35,7 @@ fn main() {
     );
     let mut cases: Vec<(&str, usize)> = vec![
         ("bench_stack", 1000),
+        ("bench_stack_edges", 1000),
         ("tyrol", 1000),
         ("tyrol_x1", 1000),
         ("tyrol_x3", 1000),
@@ -66,11 +68,12 @@ fn run_case(case: &str, rocks: usize, threads: usize) {
         return full_run(root, rocks, threads);
     }
     let scenario_path = root.join(match case {
-        "bench_stack" => "examples/bench_stack.toml",
+        "bench_stack" | "bench_stack_edges" => "examples/bench_stack.toml",
         "tschamut" => "examples/calibrated_tschamut.toml",
         _ => "examples/tyrol.toml",
     });
-    let sc = ScenarioFile::read(&scenario_path).and_then(|f| f.resolve(&scenario_path)).expect("scenario");
+    let mut sc = ScenarioFile::read(&scenario_path).and_then(|f| f.resolve(&scenario_path)).expect("scenario");
+    sc.file.simulation.params.terrain_edge_contacts = case.ends_with("_edges");
     let overrides = RunOverrides { rocks: Some(rocks), seed: None, threads: Some(threads), paths: None };
     let mut s = setup(&sc, &overrides).expect("setup");
     if let Some(f) = case.strip_prefix("tyrol_x").and_then(|f| f.parse::<usize>().ok()) {
