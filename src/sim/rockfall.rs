@@ -1088,7 +1088,9 @@ struct ListedEdge {
     /// Its lower and higher vertex indices.
     ia: u32,
     ib: u32,
-    /// A triangle it bounds.
+    /// The lowest-numbered of its triangles binned near the rock, whose material its contacts take. For an edge that
+    /// can meet the rock before the next listing that is the same triangle at every listing: such an edge passes
+    /// within the binned box, and both its triangles are binned wherever it passes.
     triangle: u32,
     /// The height of its higher end, m: an edge below the rock is turned down without reading its vertices.
     top_z: f64,
